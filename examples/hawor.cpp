@@ -1,0 +1,46 @@
+// hawor — command-line front end. Subcommands are thin wrappers over include/hawor:
+// they parse options, read files, call the library and print JSON on stdout.
+// Errors go to stderr with a non-zero exit code (2: usage, 1: bad input or failure).
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "cli_args.hpp"
+#include "commands.hpp"
+
+namespace {
+
+const char* kUsage =
+    "usage: hawor <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  metrics camera --gt GT.tum --est EST.tum     ATE / ATE-S of a camera trajectory\n"
+    "  metrics hands  --gt GT.npz --est EST.npz     PA-MPJPE, AUC, W-/WA-MPJPE, RTE, Accel\n"
+    "  demo [--out DIR]                             built-in example: writes a ground-truth and\n"
+    "                                               an estimated sequence, then evaluates them\n"
+    "\n"
+    "Run 'hawor <command> --help' for a command's options.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string cmd = argv[1];
+  try {
+    if (cmd == "metrics") return hawor_cli::cmdMetrics(argc, argv);
+    if (cmd == "demo") return hawor_cli::cmdDemo(argc, argv);
+    std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
+    return 2;
+  } catch (const hawor_cli::UsageError& e) {
+    std::fprintf(stderr, "hawor %s: %s (see 'hawor %s --help')\n", cmd.c_str(), e.what(),
+                 cmd.c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,70 @@
+// hawor/common.hpp — constants, tolerances and the error type shared by every module.
+//
+// Conventions (DESIGN §2): metres, seconds, radians; OpenCV camera frame (x right, y down,
+// z forward); poses stored camera-to-world; quaternions are Eigen's (w, x, y, z).
+// Nothing here assumes 16-byte alignment: every fixed-size Eigen member in the library is
+// declared with Eigen::DontAlign or lives on the stack (WASM has no static alignment).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace hawor {
+
+/// Library error: thrown for bad input (malformed files, wrong shapes, NaNs). The message names
+/// what is wrong and where, so a CLI can print it as is.
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& what) : std::runtime_error("hawor: " + what) {}
+};
+
+/// Per-scalar tolerances in one place (after Sophus' Constants<Scalar>).
+template <typename Scalar>
+struct Constants {
+  /// Threshold below which angle-based formulas switch to their Taylor expansions.
+  static Scalar epsilon() { return Scalar(1e-10); }
+  /// Angle under which SLERP falls back to normalised LERP.
+  static Scalar slerpEpsilon() { return Scalar(1e-6); }
+  static Scalar pi() { return Scalar(3.14159265358979323846264338327950288); }
+};
+
+template <>
+struct Constants<float> {
+  static float epsilon() { return 1e-5f; }
+  static float slerpEpsilon() { return 1e-4f; }
+  static float pi() { return 3.14159265358979323846f; }
+};
+
+/// Unaligned fixed-size Eigen aliases, safe as struct members in WASM and native alike.
+template <typename Scalar>
+using Vec2 = Eigen::Matrix<Scalar, 2, 1, Eigen::DontAlign>;
+template <typename Scalar>
+using Vec3 = Eigen::Matrix<Scalar, 3, 1, Eigen::DontAlign>;
+template <typename Scalar>
+using Vec4 = Eigen::Matrix<Scalar, 4, 1, Eigen::DontAlign>;
+template <typename Scalar>
+using Vec6 = Eigen::Matrix<Scalar, 6, 1, Eigen::DontAlign>;
+template <typename Scalar>
+using Vec7 = Eigen::Matrix<Scalar, 7, 1, Eigen::DontAlign>;
+template <typename Scalar>
+using Mat3 = Eigen::Matrix<Scalar, 3, 3, Eigen::DontAlign>;
+template <typename Scalar>
+using Mat4 = Eigen::Matrix<Scalar, 4, 4, Eigen::DontAlign>;
+template <typename Scalar>
+using MatX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+template <typename Scalar>
+using VecX = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+/// (N,3) row-major point arrays, the layout of numpy (T,21,3) slices.
+template <typename Scalar>
+using Points3 = Eigen::Matrix<Scalar, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+/// True when every coefficient is finite (no NaN, no Inf).
+template <typename Derived>
+bool allFinite(const Eigen::MatrixBase<Derived>& m) {
+  return m.allFinite();
+}
+
+}  // namespace hawor

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Runs every test: native (Release), parsers under ASan+UBSan (+ libFuzzer briefly, clang),
+# the same unit tests compiled to WebAssembly under node. Ends with "N passed, N failed".
+set -uo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+jobs=${HAWOR_JOBS:-$(nproc)}
+total_pass=0
+total_fail=0
+status=0
+log_dir=build/test-logs
+mkdir -p "$log_dir"
+
+# run_suite NAME CONFIGURE-COMMAND...: configure, build, ctest; tallies ctest's summary.
+run_suite() {
+  local name=$1; shift
+  local dir=build/$name
+  echo "=== [$name] configure + build" >&2
+  if ! "$@" -S . -B "$dir" >"$log_dir/$name-configure.log" 2>&1; then
+    tail -30 "$log_dir/$name-configure.log" >&2; echo "[$name] configure FAILED" >&2
+    total_fail=$((total_fail + 1)); status=1; return
+  fi
+  if ! cmake --build "$dir" -j"$jobs" >"$log_dir/$name-build.log" 2>&1; then
+    grep -E "error|Error" "$log_dir/$name-build.log" | head -30 >&2; echo "[$name] build FAILED" >&2
+    total_fail=$((total_fail + 1)); status=1; return
+  fi
+  echo "=== [$name] ctest" >&2
+  ctest --test-dir "$dir" --output-on-failure -j"$jobs" 2>&1 | tee "$log_dir/$name-ctest.log"
+  local line pass fail of
+  line=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log_dir/$name-ctest.log" | tail -1)
+  if [[ -z "$line" ]]; then
+    echo "[$name] no ctest summary" >&2; total_fail=$((total_fail + 1)); status=1; return
+  fi
+  fail=$(sed -E 's/.* ([0-9]+) tests failed out of ([0-9]+).*/\1/' <<<"$line")
+  of=$(sed -E 's/.* ([0-9]+) tests failed out of ([0-9]+).*/\2/' <<<"$line")
+  pass=$((of - fail))
+  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
+  ((fail == 0)) || status=1
+}
+
+run_suite native cmake -DCMAKE_BUILD_TYPE=Release
+if command -v clang++ >/dev/null; then
+  run_suite sanitize env CC=clang CXX=clang++ cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_FUZZ=ON -DHAWOR_BUILD_EXAMPLES=OFF
+else
+  run_suite sanitize cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_BUILD_EXAMPLES=OFF
+fi
+run_suite wasm emcmake cmake -DCMAKE_BUILD_TYPE=Release
+
+echo "$total_pass passed, $total_fail failed"
+exit $status
