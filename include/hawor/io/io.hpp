@@ -1,0 +1,11 @@
+// hawor/io/io.hpp — file formats: .npy arrays, ZIP / .npz archives, TUM trajectories.
+// Define HAWOR_NO_STB (stored .npz members only) or HAWOR_STB_EXTERNAL (you compile stb) before
+// including; see io/detail/stb.hpp.
+#pragma once
+
+#include "file.hpp"
+#include "npy.hpp"
+#include "deflate.hpp"
+#include "zip.hpp"
+#include "npz.hpp"
+#include "tum.hpp"
