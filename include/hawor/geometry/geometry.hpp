@@ -1,0 +1,11 @@
+// hawor/geometry/geometry.hpp — everything in the geometry module: rotation conversions,
+// the groups SO(3)/SE(3)/Sim(3), interpolation, Umeyama alignment and the pinhole camera.
+#pragma once
+
+#include "hawor/geometry/rotation.hpp"
+#include "hawor/geometry/so3.hpp"
+#include "hawor/geometry/se3.hpp"
+#include "hawor/geometry/sim3.hpp"
+#include "hawor/geometry/interpolate.hpp"
+#include "hawor/geometry/alignment.hpp"
+#include "hawor/geometry/camera.hpp"
