@@ -1,0 +1,6 @@
+// hawor/render/render.hpp — software rendering: images, the triangle rasteriser, hand masks.
+#pragma once
+
+#include "hawor/render/image.hpp"
+#include "hawor/render/rasterizer.hpp"
+#include "hawor/render/mask.hpp"
