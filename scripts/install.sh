@@ -16,4 +16,14 @@ if ((${#missing[@]})); then
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
+# npm (Debian's nodejs package has none; nodesource's nodejs ships its own).
+if ! command -v npm >/dev/null; then
+  apt-get install -y -qq --no-install-recommends npm >/dev/null
+fi
+# npm packages of package.json (exact versions): the licence-free default hand (MIT) ...
+root=$(cd "$(dirname "$0")/.." && pwd)
+if [[ ! -f "$root/node_modules/@webxr-input-profiles/assets/package.json" ]]; then
+  echo "[install] npm install" >&2
+  (cd "$root" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
+fi
 echo "[install] toolchain ready: $(cmake --version | head -1); $(em++ --version 2>/dev/null | head -1 | cut -c1-60); node $(node --version)" >&2

@@ -2,7 +2,7 @@
 #   test_<module>      unit/property tests, native and WASM (files not starting with ref_)
 #   test_<module>_ref  cross-checks against numpy/scipy scripts run at test time (ref_*.cpp), native
 # Python-driven end-to-end checks of the CLI: tests/cli/test_*.py, each gets the hawor binary.
-foreach(module geometry motion eval io hand)
+foreach(module geometry motion eval io hand render)
   file(GLOB _all CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/${module}/*.cpp")
   set(_unit "")
   set(_ref "")
@@ -14,9 +14,14 @@ foreach(module geometry motion eval io hand)
       list(APPEND _unit "${f}")
     endif()
   endforeach()
+  # The sanitizer build (HAWOR_SANITIZE) compiles only the tests of file parsers: all of io/,
+  # and the pickle / glTF / model-file tests of hand/ (keeps that Debug+ASan build short).
   set(_parser "")
   if(module STREQUAL "io" OR module STREQUAL "hand")
     set(_parser PARSER)
+  endif()
+  if(HAWOR_SANITIZE AND module STREQUAL "hand")
+    list(FILTER _unit INCLUDE REGEX "(pickle|gltf|mano_loader|model_io)[^/]*\\.cpp$")
   endif()
   if(_unit)
     hawor_add_test(test_${module} SOURCES ${_unit} ${_parser} LABELS ${module})
