@@ -1,4 +1,5 @@
-// hawor/io/io.hpp — file formats: .npy arrays, ZIP / .npz archives, TUM trajectories.
+// hawor/io/io.hpp — file formats: .npy arrays, ZIP / .npz archives, TUM trajectories, JSON and
+// binary glTF (GLB).
 // Define HAWOR_NO_STB (stored .npz members only) or HAWOR_STB_EXTERNAL (you compile stb) before
 // including; see io/detail/stb.hpp.
 #pragma once
@@ -9,3 +10,5 @@
 #include "zip.hpp"
 #include "npz.hpp"
 #include "tum.hpp"
+#include "json.hpp"
+#include "gltf.hpp"
