@@ -9,3 +9,5 @@
 #include "hawor/geometry/interpolate.hpp"
 #include "hawor/geometry/alignment.hpp"
 #include "hawor/geometry/camera.hpp"
+#include "hawor/geometry/robust_loss.hpp"
+#include "hawor/geometry/pnp.hpp"
