@@ -4,6 +4,7 @@
 
 #include "common.hpp"
 #include "geometry/geometry.hpp"
+#include "hand/hand.hpp"
 #include "render/render.hpp"
 #include "motion/motion.hpp"
 #include "eval/eval.hpp"
