@@ -1,9 +1,11 @@
 // hawor metrics camera|hands — the standard metrics (DESIGN §8) of files on disk.
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "cli_args.hpp"
+#include "cli_hand.hpp"
 #include "commands.hpp"
 #include "hawor/eval/eval.hpp"
 #include "hawor/io/npz.hpp"
@@ -25,10 +27,24 @@ const char* kCameraHelp =
 
 const char* kHandsHelp =
     "usage: hawor metrics hands --gt GT.npz --est EST.npz [--fps 30]\n"
+    "                           [--model FILE|default [--side left|right]]\n"
     "\n"
     "Hand motion error. Each npz holds joints_world (T,21,3) and joints_cam (T,21,3) in metres\n"
     "and optionally valid (T,). A frame is evaluated when it is valid in both files (missing key:\n"
-    "all frames valid). Prints one JSON object:\n"
+    "all frames valid).\n"
+    "A file without joints_world or joints_cam may hold hand parameters instead, turned into the\n"
+    "model's keypoints (MANO: 21, OpenPose order) by the forward pass of --model (a MANO .pkl /\n"
+    ".npz, a hawor hand-model .npz, a skinned .glb or 'default'; --side as for 'hawor hand'):\n"
+    "  rot or global_orient  (T,3) axis-angle of the wrist, world frame, radians\n"
+    "  hand_pose             (T,(J-1)*3) or (T,J-1,3) joint axis-angles (MANO: 45)\n"
+    "  betas                 (T,B') or (B') shape coefficients, B' <= the model's B; optional\n"
+    "  trans or transl       (T,3) translation, world frame, metres\n"
+    "  cam_rot, cam_trans    (T,3) each, optional: the same hand in the camera frame\n"
+    "joints_world = forward(rot, hand_pose, betas, trans); joints_cam = forward(cam_rot, hand_pose,\n"
+    "betas, cam_trans) when both cam_ keys are present, else joints_cam = joints_world (a static\n"
+    "camera at the world origin, e.g. a 'hawor fit' output). Arrays present in a file are always\n"
+    "used as they are; parameters are read only for the joints a file lacks, and only at the\n"
+    "frames its own 'valid' marks valid (others may hold NaN). Prints one JSON object:\n"
     "  pa_mpjpe  per-frame similarity-Procrustes joint error, camera joints (mm)\n"
     "  auc       area under the PCK curve over 0-50 mm, 100 steps (camera joints, PA)\n"
     "  w_mpjpe   world joints, 100-frame chunks aligned (Sim3) on their first 2 frames (mm)\n"
@@ -102,8 +118,66 @@ std::vector<uint8_t> readValid(const hawor::Npz& z, size_t frames) {
   return out;
 }
 
+/// The --model of `metrics hands`, for files that hold hand parameters instead of joints.
+class ModelOnDemand {
+ public:
+  /// Loads --model when given (a bad path is an error even if no file needs the model).
+  ModelOnDemand(const Args& args, const char* argv0) {
+    if (args.has("model")) {
+      model_ = loadModelOption(args, argv0).model;
+      loaded_ = true;
+    }
+  }
+  const hawor::HandModel<double>& get(const std::string& why) const {
+    if (!loaded_) {
+      throw hawor::Error(why + ": give joints_world/joints_cam, or hand parameters (rot, hand_pose, betas, trans) "
+                         "with --model FILE|default (see 'hawor metrics hands --help')");
+    }
+    return model_;
+  }
+
+ private:
+  hawor::HandModel<double> model_;
+  bool loaded_ = false;
+};
+
+/// joints_world / joints_cam of an npz: the array when present, else the forward pass of its hand
+/// parameters (see kHandsHelp) at the frames its own 'valid' marks valid, NaN elsewhere.
+hawor::JointSequence<double> jointsOf(const hawor::Npz& z, const std::string& key, const ModelOnDemand& model) {
+  if (z.has(key)) return readJoints(z, key);
+  const hawor::HandModel<double>& m = model.get(z.source() + " has no '" + key + "'");
+  const bool cam = key == "joints_cam" && (z.has("cam_rot") || z.has("cam_trans"));
+  if (cam && !(z.has("cam_rot") && z.has("cam_trans"))) {
+    throw hawor::Error(z.source() + ": 'cam_rot' and 'cam_trans' must be given together");
+  }
+  const std::vector<std::string> rotKeys = cam ? std::vector<std::string>{"cam_rot"}
+                                               : std::vector<std::string>{"rot", "global_orient"};
+  const std::vector<std::string> transKeys = cam ? std::vector<std::string>{"cam_trans"}
+                                                 : std::vector<std::string>{"trans", "transl"};
+  const HandParams p = readHandParams(z, m, rotKeys, transKeys);
+  if (!p.orient.present() || !p.pose.present() || !p.transl.present()) {
+    throw hawor::Error(z.source() + " has no '" + key + "' and its hand parameters are incomplete: '" +
+                       (cam ? "cam_rot" : "rot") + "', 'hand_pose' and '" + (cam ? "cam_trans" : "trans") +
+                       "' are needed");
+  }
+  const size_t T = p.frames() ? p.frames() : 1;
+  const std::vector<uint8_t> valid = readValidFlags(z, T);
+  const Eigen::Index K = m.numKeypoints();
+  if (K == 0) throw hawor::Error("metrics hands: the --model has no keypoints to compare");
+  hawor::JointSequence<double> s(static_cast<Eigen::Index>(T), 3 * K);
+  s.setConstant(std::numeric_limits<double>::quiet_NaN());
+  hawor::HandWorkspace<double> ws;
+  hawor::HandOutput<double> o;
+  for (size_t t = 0; t < T; ++t) {
+    if (!valid[t]) continue;
+    hawor::forward(m, p.at(t, m), ws, o);
+    s.row(static_cast<Eigen::Index>(t)) = Eigen::Map<const Eigen::RowVectorXd>(o.keypoints.data(), 3 * K);
+  }
+  return s;
+}
+
 int metricsHands(int argc, char** argv) {
-  Args args(argc, argv, 3, {"gt", "est", "fps"}, {});
+  Args args(argc, argv, 3, {"gt", "est", "fps", "model", "side"}, {});
   if (args.help()) {
     std::fputs(kHandsHelp, stdout);
     return 0;
@@ -113,8 +187,10 @@ int metricsHands(int argc, char** argv) {
   if (fps <= 0) throw UsageError("--fps must be positive");
   const hawor::Npz gt = hawor::Npz::read(args.required("gt"));
   const hawor::Npz est = hawor::Npz::read(args.required("est"));
-  const auto gt_world = readJoints(gt, "joints_world"), gt_cam = readJoints(gt, "joints_cam");
-  const auto est_world = readJoints(est, "joints_world"), est_cam = readJoints(est, "joints_cam");
+  sideOption(args);  // a bad --side is a usage error even without --model
+  const ModelOnDemand model(args, argv[0]);
+  const auto gt_world = jointsOf(gt, "joints_world", model), gt_cam = jointsOf(gt, "joints_cam", model);
+  const auto est_world = jointsOf(est, "joints_world", model), est_cam = jointsOf(est, "joints_cam", model);
   for (const auto* s : {&gt_cam, &est_world, &est_cam}) {
     if (s->rows() != gt_world.rows() || s->cols() != gt_world.cols())
       throw hawor::Error("metrics hands: joints_world/joints_cam of " + gt.source() + " and " +

@@ -17,8 +17,15 @@ const char* kUsage =
     "commands:\n"
     "  metrics camera --gt GT.tum --est EST.tum     ATE / ATE-S of a camera trajectory\n"
     "  metrics hands  --gt GT.npz --est EST.npz     PA-MPJPE, AUC, W-/WA-MPJPE, RTE, Accel\n"
+    "                 [--model FILE|default]        (joints from hand parameters)\n"
     "  demo [--out DIR]                             built-in example: writes a ground-truth and\n"
     "                                               an estimated sequence, then evaluates them\n"
+    "  convert-hand --glb HAND.glb --side left|right --out MODEL.npz\n"
+    "                                               skinned glTF hand -> hawor hand model\n"
+    "  hand --model FILE|default [--pose POSE.npz] --out MESH.obj\n"
+    "                                               posed hand mesh (forward pass) as OBJ\n"
+    "  fit --model FILE|default --obs KEYPOINTS.npz --intrinsics fx,fy,cx,cy --out FIT.npz\n"
+    "                                               per-frame hand fit to 2D/3D keypoints\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -33,6 +40,9 @@ int main(int argc, char** argv) {
   try {
     if (cmd == "metrics") return hawor_cli::cmdMetrics(argc, argv);
     if (cmd == "demo") return hawor_cli::cmdDemo(argc, argv);
+    if (cmd == "convert-hand") return hawor_cli::cmdConvertHand(argc, argv);
+    if (cmd == "hand") return hawor_cli::cmdHand(argc, argv);
+    if (cmd == "fit") return hawor_cli::cmdFit(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {
