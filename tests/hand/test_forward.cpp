@@ -62,12 +62,13 @@ TEMPLATE_TEST_CASE("hand forward: shape blend and joint regression", "[hand][for
   CHECK(maxAbs(out.vertices, expect) <= tol<S>());
   const hawor::Points3<S> jr = m.jRegressor * expect;
   CHECK(maxAbs(out.joints, jr) <= tol<S>());
-  // Fewer betas than the model has = the missing ones are zero.
+  // Fewer betas than the model has = the missing ones are zero (equal up to rounding: the
+  // products may group the terms differently, e.g. the plain-loop kernels of the WASM build).
   auto p3 = p;
   p3.betas = p.betas.head(3);
   auto p3full = p;
   p3full.betas.tail(m.numBetas() - 3).setZero();
-  CHECK(maxAbs(hawor::forward(m, p3).vertices, hawor::forward(m, p3full).vertices) == 0.0);
+  CHECK(maxAbs(hawor::forward(m, p3).vertices, hawor::forward(m, p3full).vertices) <= tol<S>());
 }
 
 TEMPLATE_TEST_CASE("hand forward: translation shifts every output", "[hand][forward]", float, double) {
