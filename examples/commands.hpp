@@ -7,4 +7,5 @@ int cmdDemo(int argc, char** argv);     // hawor demo --out DIR
 int cmdConvertHand(int argc, char** argv);  // hawor convert-hand --glb F --side S --out M
 int cmdHand(int argc, char** argv);  // hawor hand --model M [--pose P] --out mesh.obj
 int cmdFit(int argc, char** argv);   // hawor fit --model M --obs K.npz --intrinsics ... --out F
+int cmdSynth(int argc, char** argv);  // hawor synth --preset P --seed N --out DIR | --list
 }  // namespace hawor_cli

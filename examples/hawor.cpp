@@ -26,6 +26,9 @@ const char* kUsage =
     "                                               posed hand mesh (forward pass) as OBJ\n"
     "  fit --model FILE|default --obs KEYPOINTS.npz --intrinsics fx,fy,cx,cy --out FIT.npz\n"
     "                                               per-frame hand fit to 2D/3D keypoints\n"
+    "  synth --preset NAME --seed N --out DIR       synthetic egocentric sequence with ground\n"
+    "        [--frames N] [--size WxH] [--model ..] truth (RGB, depth, masks, poses, hands);\n"
+    "  synth --list                                 --list prints the preset names\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -43,6 +46,7 @@ int main(int argc, char** argv) {
     if (cmd == "convert-hand") return hawor_cli::cmdConvertHand(argc, argv);
     if (cmd == "hand") return hawor_cli::cmdHand(argc, argv);
     if (cmd == "fit") return hawor_cli::cmdFit(argc, argv);
+    if (cmd == "synth") return hawor_cli::cmdSynth(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {

@@ -1,0 +1,193 @@
+// hawor synth — writes a synthetic egocentric sequence with ground truth (include/hawor/synth).
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli_args.hpp"
+#include "cli_hand.hpp"
+#include "commands.hpp"
+#include "hawor/hand/load_model.hpp"
+#include "hawor/hand/mirror.hpp"
+#include "hawor/hand/synthetic_hand.hpp"
+#include "hawor/synth/synth.hpp"
+
+namespace hawor_cli {
+namespace {
+
+const char* kSynthHelp =
+    "usage: hawor synth --preset NAME --seed N [--frames N] [--size WxH] [--model FILE|default|synthetic]\n"
+    "                   [--left-model FILE] [--fps F] [--noise SIGMA] --out DIR\n"
+    "       hawor synth --list\n"
+    "\n"
+    "Renders a synthetic egocentric sequence (a textured room, head-like camera motion, two\n"
+    "articulated hands) with ground truth. The same preset, seed, options and hand models give\n"
+    "the same bytes on every run.\n"
+    "\n"
+    "  --list                print the preset names, one a line, and exit\n"
+    "  --preset NAME         walk, table_work, fast_turns, pure_rotation, hands_cover\n"
+    "  --seed N              integer in [0, 2^64)\n"
+    "  --frames N            number of frames (default: the preset's, 300-360)\n"
+    "  --size WxH            image size (default 640x480; 16..8192 per side)\n"
+    "  --model FILE|default|synthetic\n"
+    "                        the hands: 'default' (the default) = the shipped WebXR generic hands\n"
+    "                        (hand_left/right.npz in $HAWOR_HAND_DIR or <hawor dir>/../models, or\n"
+    "                        left/right.glb of the npm package); 'synthetic' = the built-in\n"
+    "                        procedural MANO-like hand (no file needed); FILE = a MANO .pkl / .npz,\n"
+    "                        a hawor hand-model .npz or a skinned .glb of one side, mirrored for\n"
+    "                        the other side\n"
+    "  --left-model FILE     a separate file for the left hand (e.g. MANO_LEFT.pkl)\n"
+    "  --fps F               frame rate (default 30)\n"
+    "  --noise SIGMA         pixel noise in grey levels (default: the preset's, 1.5)\n"
+    "  --out DIR             output folder (created)\n"
+    "\n"
+    "Writes DIR/rgb/000000.png ..., DIR/mask/000000.png (0 background, 128 left hand, 255 right\n"
+    "hand), DIR/depth/000000.npy (float32 metres along the optical axis), DIR/camera_gt.tum\n"
+    "(camera-to-world, timestamps frame/fps; world = the first camera's frame), DIR/hands_gt.npz\n"
+    "(left_/right_: trans, rot, hand_pose, betas, valid, joints_world, joints_cam, cam_rot,\n"
+    "cam_trans, visible_pixels, kp_in_image; timestamps), DIR/intrinsics.txt ('fx fy cx cy width\n"
+    "height fps') and DIR/meta.json. Prints one JSON object: preset, seed, frames, width, height,\n"
+    "fps, coverage_max / coverage_mean (hand pixels / image), frames_coverage_20 (frames with\n"
+    "hands on >= 20 % of the image), valid_left / valid_right (frames), render_ms_median,\n"
+    "render_ms_p95, write_ms_median, out.\n";
+
+/// A non-negative decimal integer <= maxValue (no sign, no spaces).
+std::uint64_t parseUnsigned(const std::string& s, const std::string& what, std::uint64_t maxValue) {
+  if (s.empty() || s.size() > 20) throw UsageError(what + " expects a non-negative integer, got '" + s + "'");
+  std::uint64_t v = 0;
+  for (char c : s) {
+    if (c < '0' || c > '9') throw UsageError(what + " expects a non-negative integer, got '" + s + "'");
+    const std::uint64_t d = static_cast<std::uint64_t>(c - '0');
+    if (v > (maxValue - d) / 10) throw UsageError(what + " is too large: '" + s + "' (at most " + std::to_string(maxValue) + ")");
+    v = v * 10 + d;
+  }
+  return v;
+}
+
+/// The left and right hand models of --model / --left-model.
+void loadHands(const Args& args, const char* argv0, hawor::HandModel<double>& left, hawor::HandModel<double>& right,
+               std::string& leftSource, std::string& rightSource) {
+  const std::string m = args.get("model", "default");
+  auto other = [](const hawor::HandModel<double>& h) { return hawor::mirrorHandModel(h); };
+  if (m == "synthetic") {
+    right = hawor::makeSyntheticHand<double>();
+    left = other(right);
+    rightSource = "synthetic";
+    leftSource = "synthetic (mirrored)";
+  } else if (m == "default") {
+    const std::vector<std::string> dirs = defaultModelDirs(argv0);
+    rightSource = hawor::findDefaultHandModel(hawor::HandSide::Right, dirs);
+    right = hawor::loadAnyHandModel<double>(rightSource, hawor::HandSide::Right).model;
+    try {
+      leftSource = hawor::findDefaultHandModel(hawor::HandSide::Left, dirs);
+      left = hawor::loadAnyHandModel<double>(leftSource, hawor::HandSide::Left).model;
+    } catch (const hawor::Error&) {
+      left = other(right);
+      leftSource = rightSource + " (mirrored)";
+    }
+  } else {
+    hawor::LoadedHandModel<double> h = hawor::loadAnyHandModel<double>(m, hawor::HandSide::Auto);
+    if (h.model.isLeft) {
+      left = std::move(h.model);
+      right = other(left);
+      leftSource = m;
+      rightSource = m + " (mirrored)";
+    } else {
+      right = std::move(h.model);
+      left = other(right);
+      rightSource = m;
+      leftSource = m + " (mirrored)";
+    }
+  }
+  if (args.has("left-model")) {
+    const std::string f = args.required("left-model");
+    left = hawor::loadAnyHandModel<double>(f, hawor::HandSide::Left).model;
+    leftSource = f;
+  }
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
+  return v[std::min(i, v.size() - 1)];
+}
+
+}  // namespace
+
+int cmdSynth(int argc, char** argv) {
+  Args args(argc, argv, 2, {"preset", "seed", "frames", "size", "model", "left-model", "fps", "noise", "out"}, {"list"});
+  if (args.help()) {
+    std::fputs(kSynthHelp, stdout);
+    return 0;
+  }
+  if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+  if (args.flag("list")) {
+    if (args.has("preset") || args.has("out")) throw UsageError("--list takes no other options");
+    for (const std::string& n : hawor::synth::synthPresetNames()) std::printf("%s\n", n.c_str());
+    return 0;
+  }
+  const std::string presetName = args.required("preset");
+  hawor::synth::SynthPreset preset;
+  try {
+    preset = hawor::synth::findSynthPreset(presetName);
+  } catch (const hawor::Error& e) {
+    throw UsageError(std::string(e.what()).substr(7) + "; 'hawor synth --list' prints them");  // drop "hawor: "
+  }
+  const std::uint64_t seed = parseUnsigned(args.required("seed"), "--seed", ~std::uint64_t(0));
+  const std::string out = args.required("out");
+  hawor::synth::SynthOptions opt;
+  if (args.has("frames")) {
+    opt.frames = static_cast<int>(parseUnsigned(args.required("frames"), "--frames", 1000000));
+    if (opt.frames < 1) throw UsageError("--frames must be at least 1");
+  }
+  if (args.has("size")) {
+    const std::string s = args.required("size");
+    const std::size_t x = s.find('x');
+    if (x == std::string::npos) throw UsageError("--size expects WxH (e.g. 640x480), got '" + s + "'");
+    opt.width = static_cast<int>(parseUnsigned(s.substr(0, x), "--size width", 100000));
+    opt.height = static_cast<int>(parseUnsigned(s.substr(x + 1), "--size height", 100000));
+    if (opt.width < 16 || opt.height < 16 || opt.width > 8192 || opt.height > 8192) {
+      throw UsageError("--size: each side must be in 16..8192 pixels, got '" + s + "'");
+    }
+  }
+  opt.fps = args.number("fps", 30);
+  if (!(opt.fps > 0 && opt.fps <= 1000)) throw UsageError("--fps must be in (0, 1000]");
+  if (args.has("noise")) {
+    const double n = args.number("noise", 0);
+    if (!(n >= 0 && n <= 100)) throw UsageError("--noise must be in [0, 100] grey levels");
+    opt.noiseSigma = static_cast<float>(n);
+  }
+  const std::string model = args.get("model", "default");
+  if (model.empty()) throw UsageError("--model needs a file, 'default' or 'synthetic'");
+
+  hawor::HandModel<double> left, right;
+  std::string leftSource, rightSource;
+  loadHands(args, argv[0], left, right, leftSource, rightSource);
+  hawor::synth::SynthSequence<double> seq(preset, seed, left, right, opt);
+  hawor::synth::SynthWriteOptions wo;
+  wo.meta = {{"hand_model_left", leftSource}, {"hand_model_right", rightSource}};
+  const hawor::synth::SynthWriteSummary sum = hawor::synth::writeSynthSequence(seq, out, wo);
+
+  JsonObject j;
+  j.str("preset", preset.name)
+      .raw("seed", std::to_string(seed))
+      .integer("frames", sum.frames)
+      .integer("width", seq.camera().width)
+      .integer("height", seq.camera().height)
+      .num("fps", seq.fps())
+      .num("coverage_max", sum.coverageMax)
+      .num("coverage_mean", sum.coverageMean)
+      .integer("frames_coverage_20", sum.framesCovered20)
+      .integer("valid_left", sum.validFrames[0])
+      .integer("valid_right", sum.validFrames[1])
+      .num("render_ms_median", percentile(sum.renderMs, 0.5))
+      .num("render_ms_p95", percentile(sum.renderMs, 0.95))
+      .num("write_ms_median", percentile(sum.writeMs, 0.5))
+      .str("out", out);
+  std::printf("%s\n", j.dump().c_str());
+  return 0;
+}
+
+}  // namespace hawor_cli

@@ -1,0 +1,312 @@
+// hawor/synth/sequence.hpp — a synthetic egocentric sequence with ground truth: camera poses,
+// RGB, depth, hand masks, hand parameters and keypoints, for a preset and a seed.
+//
+// Frames (DESIGN §2). The scene lives in its room frame (scene.hpp, z up). The OUTPUT world
+// frame is the first camera's frame (frame 0 has the identity pose), metres: T_w_room =
+// T_room_c(0)⁻¹. Camera poses are camera-to-world, T_w_c(i) = T_w_room·T_room_c(i), at times
+// t_i = i / fps. gravityWorld() is the world direction of gravity.
+// Hands (DESIGN §3). Per hand and frame the MANO parameters in the world frame: rot (axis-angle
+// of joint 0), hand_pose (the J−1 joint axis-angles), betas (fixed per sequence, shared by both
+// hands: one person), trans, with vertices = forward(rot, hand_pose, betas, trans) in world
+// coordinates (the rotation acts about J_0(β): the wrist is at J_0(β) + trans). The camera-frame
+// parameters follow the same rule: rot_c = R_cw·rot, trans_c = R_cw·(trans + J_0) + t_cw − J_0.
+// joints_world / joints_cam are the 21 keypoints (OpenPose order) of the forward pass, world and
+// camera frame (joints_cam = T_c_w · joints_world).
+// Placement: hand_motion.hpp plans each hand in a head frame that follows the camera's
+// rotation with the preset's lag (exponential smoothing of the rotation, rate
+// α = 1 − exp(−1/(lag·fps)) per frame, centred on the camera); head-frame wrist p and
+// orientation R_h map to the room as eye + R_lag·p and R_lag·R_h.
+// Visibility: `valid` = the hand has at least minVisiblePixels pixels of its own in the image
+// (nearest surface there; a hand hidden by the scene or the other hand, or out of view, is
+// invalid); per keypoint `inImage` = in front of the camera (z > 1 cm) and projecting inside the
+// image (it may still be occluded).
+// Determinism: every random number comes from SynthRng streams of the seed (random.hpp), so a
+// seed gives the same sequence on every run and platform.
+// Thread-safety: renderFrame() uses the sequence's scratch buffers: one thread per sequence;
+// the const members may be called concurrently. Movable, not copyable (the scene and models are
+// shared, read-only, through sharedScene()).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "hawor/common.hpp"
+#include "hawor/geometry/camera.hpp"
+#include "hawor/geometry/rotation.hpp"
+#include "hawor/hand/forward.hpp"
+#include "hawor/hand/hand_model.hpp"
+#include "hawor/synth/hand_motion.hpp"
+#include "hawor/synth/hand_rig.hpp"
+#include "hawor/synth/presets.hpp"
+#include "hawor/synth/random.hpp"
+#include "hawor/synth/renderer.hpp"
+#include "hawor/synth/scene.hpp"
+#include "hawor/synth/trajectory.hpp"
+
+namespace hawor {
+namespace synth {
+
+/// Size, length and camera of a generated sequence.
+struct SynthOptions {
+  int width = 640, height = 480;
+  int frames = 0;          ///< 0: the preset's default
+  double fps = 30;
+  double fovDeg = 90;      ///< diagonal field of view (PinholeCamera::fromFov)
+  int textureDivisor = 1;  ///< 1 full-resolution textures, 2 or 4 coarser (faster setup)
+  float noiseSigma = -1;   ///< pixel noise in grey levels; < 0: the preset's
+  /// A hand is valid in a frame with at least max(1, round(fraction·W·H)) visible pixels.
+  double minVisibleFraction = 2e-4;
+};
+
+enum HandSideIndex { kLeftHand = 0, kRightHand = 1 };
+
+/// Ground truth of one hand in one frame.
+template <typename Scalar>
+struct SynthHandFrame {
+  HandPose<Scalar> world;         ///< MANO parameters, world frame
+  HandPose<Scalar> camera;        ///< the same hand, camera frame
+  Points3<Scalar> jointsWorld;    ///< (21,3)
+  Points3<Scalar> jointsCam;      ///< (21,3)
+  std::array<bool, 21> inImage{};  ///< keypoint in front of the camera and inside the image
+  int visiblePixels = 0;          ///< pixels where this hand is the nearest surface
+  bool valid = false;             ///< visiblePixels >= the sequence's threshold
+};
+
+/// One rendered frame with its ground truth.
+template <typename Scalar>
+struct SynthFrame {
+  int index = 0;
+  double time = 0;                 ///< seconds, index / fps
+  RigidPose<Scalar> worldFromCamera;  ///< T_w_c
+  RenderedImages images;           ///< rgb, depth, mask (left label 128, right 255)
+  SynthHandFrame<Scalar> hands[2];  ///< kLeftHand, kRightHand
+  double coverage = 0;             ///< fraction of the image covered by hands
+};
+
+template <typename Scalar>
+class SynthSequence {
+ public:
+  static constexpr std::uint8_t kLeftLabel = 128, kRightLabel = 255;
+
+  /// A sequence of `preset` for `seed` with the given left and right hand models (prepared,
+  /// 21 keypoints; copied). The scene is built from the seed.
+  SynthSequence(const SynthPreset& preset, std::uint64_t seed, const HandModel<Scalar>& left,
+                const HandModel<Scalar>& right, const SynthOptions& options = SynthOptions())
+      : SynthSequence(preset, seed, left, right, options, nullptr) {}
+
+  /// The same with a prebuilt scene (shared, e.g. between tests); nullptr builds it.
+  SynthSequence(const SynthPreset& preset, std::uint64_t seed, const HandModel<Scalar>& left,
+                const HandModel<Scalar>& right, const SynthOptions& options,
+                std::shared_ptr<const IndoorScene<Scalar>> scene)
+      : preset_(preset), seed_(seed), opt_(options) {
+    validateOptions();
+    if (!left.isLeft) throw Error("synth: the left hand model is marked as a right hand");
+    if (right.isLeft) throw Error("synth: the right hand model is marked as a left hand");
+    models_[0] = std::make_shared<const HandModel<Scalar>>(left);
+    models_[1] = std::make_shared<const HandModel<Scalar>>(right);
+    rigs_[0] = std::make_shared<const HandRig<Scalar>>(*models_[0]);
+    rigs_[1] = std::make_shared<const HandRig<Scalar>>(*models_[1]);
+    if (!scene) {
+      SceneOptions so;
+      so.textureDivisor = opt_.textureDivisor;
+      scene = std::make_shared<const IndoorScene<Scalar>>(makeIndoorScene<Scalar>(seed, so));
+    }
+    scene_ = std::move(scene);
+    camera_ = PinholeCamera<Scalar>::fromFov(opt_.width, opt_.height, Scalar(opt_.fovDeg));
+    frames_ = opt_.frames > 0 ? opt_.frames : preset_.frames;
+    noise_ = opt_.noiseSigma >= 0 ? opt_.noiseSigma : preset_.noiseSigma;
+    plan();
+  }
+
+  const SynthPreset& preset() const { return preset_; }
+  std::uint64_t seed() const { return seed_; }
+  const SynthOptions& options() const { return opt_; }
+  int numFrames() const { return frames_; }
+  double fps() const { return opt_.fps; }
+  const PinholeCamera<Scalar>& camera() const { return camera_; }
+  const IndoorScene<Scalar>& scene() const { return *scene_; }
+  std::shared_ptr<const IndoorScene<Scalar>> sharedScene() const { return scene_; }
+  const HandModel<Scalar>& model(int side) const { return *models_[checkSide(side)]; }
+  /// Pixels a hand needs to be valid.
+  int minVisiblePixels() const {
+    const double n = opt_.minVisibleFraction * opt_.width * opt_.height;
+    return std::max(1, static_cast<int>(n + 0.5));
+  }
+
+  /// T_w_room: room frame (scene.hpp) → world frame (first camera).
+  const RigidPose<Scalar>& worldFromRoom() const { return worldFromRoom_; }
+  /// T_w_c of frame i (camera-to-world); frame 0 is exactly the identity.
+  RigidPose<Scalar> worldFromCamera(int i) const {
+    const std::size_t fi = checkFrame(i);
+    return fi == 0 ? RigidPose<Scalar>() : worldFromRoom_ * roomFromCamera_[fi];
+  }
+  /// T_room_c of frame i.
+  const RigidPose<Scalar>& roomFromCamera(int i) const { return roomFromCamera_[checkFrame(i)]; }
+  /// Unit gravity direction in the world frame.
+  Vec3<Scalar> gravityWorld() const { return worldFromRoom_.R * Vec3<Scalar>(0, 0, -1); }
+  /// World-frame MANO parameters of a hand (kLeftHand / kRightHand) in frame i.
+  const HandPose<Scalar>& handPoseWorld(int side, int i) const {
+    return poses_[static_cast<std::size_t>(checkSide(side))][checkFrame(i)];
+  }
+  /// Camera-frame MANO parameters of a hand in frame i (see the file comment).
+  HandPose<Scalar> handPoseCamera(int side, int i) const {
+    const HandPose<Scalar>& w = handPoseWorld(side, i);
+    const RigidPose<Scalar> cw = worldFromCamera(i).inverse();
+    HandPose<Scalar> c = w;
+    c.globalOrient = matrixToAxisAngle(Mat3<Scalar>(cw.R * axisAngleToMatrix(w.globalOrient)));
+    const Vec3<Scalar>& j0 = root_[static_cast<std::size_t>(side)];  // J_0(β), β fixed per sequence
+    c.transl = cw.R * (w.transl + j0) + cw.t - j0;
+    return c;
+  }
+
+  /// Renders frame i and fills its ground truth.
+  void renderFrame(int i, SynthFrame<Scalar>& out) {
+    const std::size_t fi = checkFrame(i);
+    if (!renderer_) renderer_ = std::make_unique<SceneRenderer<Scalar>>(*scene_, camera_);
+    out.index = i;
+    out.time = static_cast<double>(i) / opt_.fps;
+    out.worldFromCamera = worldFromCamera(i);
+    const RigidPose<Scalar> cw = out.worldFromCamera.inverse();
+    std::vector<HandMeshView<Scalar>> views;
+    static const Rgb skin[2] = {Rgb(222.0f, 168.0f, 138.0f), Rgb(214.0f, 160.0f, 128.0f)};
+    for (int s = 0; s < 2; ++s) {
+      SynthHandFrame<Scalar>& h = out.hands[s];
+      h.world = poses_[static_cast<std::size_t>(s)][fi];
+      forward(*models_[static_cast<std::size_t>(s)], h.world, ws_, fwd_);
+      h.jointsWorld = fwd_.keypoints;
+      h.jointsCam.resize(h.jointsWorld.rows(), 3);
+      for (Eigen::Index k = 0; k < h.jointsWorld.rows(); ++k) {
+        h.jointsCam.row(k) = (cw.R * h.jointsWorld.row(k).transpose() + cw.t).transpose();
+        const Vec3<Scalar> p = h.jointsCam.row(k).transpose();
+        h.inImage[static_cast<std::size_t>(k)] = p.z() > Scalar(0.01) && camera_.inImage(camera_.project(p));
+      }
+      h.camera = handPoseCamera(s, i);
+      Points3<Scalar>& v = handVerts_[static_cast<std::size_t>(s)];
+      v.resize(fwd_.vertices.rows(), 3);
+      for (Eigen::Index k = 0; k < v.rows(); ++k) v.row(k) = (cw.R * fwd_.vertices.row(k).transpose() + cw.t).transpose();
+      HandMeshView<Scalar> view;
+      view.vertices = &v;
+      view.faces = &models_[static_cast<std::size_t>(s)]->faces;
+      view.albedo = skin[s];
+      view.label = s == kLeftHand ? kLeftLabel : kRightLabel;
+      views.push_back(view);
+    }
+    const std::uint32_t noiseSeed = hash3(static_cast<std::uint32_t>(seed_), static_cast<std::uint32_t>(seed_ >> 32),
+                                          static_cast<std::uint32_t>(i));
+    renderer_->render(roomFromCamera_[fi], views, noise_, noiseSeed, out.images);
+    const int need = minVisiblePixels();
+    int covered = 0;
+    for (int s = 0; s < 2; ++s) {
+      out.hands[s].visiblePixels = out.images.handPixels[static_cast<std::size_t>(s)];
+      out.hands[s].valid = out.hands[s].visiblePixels >= need;
+      covered += out.hands[s].visiblePixels;
+    }
+    out.coverage = static_cast<double>(covered) / (static_cast<double>(opt_.width) * opt_.height);
+  }
+
+ private:
+  void validateOptions() const {
+    if (opt_.width < 16 || opt_.height < 16 || opt_.width > 8192 || opt_.height > 8192) {
+      throw Error("synth: image size " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
+                  " outside 16..8192 pixels per side");
+    }
+    if (opt_.frames < 0 || opt_.frames > 1000000) throw Error("synth: frames must be in 1..1000000 (0 = preset default)");
+    if (!(opt_.fps > 0 && opt_.fps <= 1000)) throw Error("synth: fps must be in (0, 1000]");
+    if (!(opt_.fovDeg >= 20 && opt_.fovDeg <= 150)) throw Error("synth: diagonal field of view must be in [20, 150] degrees");
+    if (!(opt_.minVisibleFraction >= 0 && opt_.minVisibleFraction < 1)) {
+      throw Error("synth: minVisibleFraction must be in [0, 1)");
+    }
+    if (!std::isfinite(opt_.noiseSigma) || opt_.noiseSigma > 100) throw Error("synth: noiseSigma must be finite and <= 100");
+    if (preset_.frames < 1) throw Error("synth: preset '" + preset_.name + "' has no default length");
+  }
+  static int checkSide(int side) {
+    if (side != kLeftHand && side != kRightHand) throw Error("synth: hand side must be 0 (left) or 1 (right)");
+    return side;
+  }
+  std::size_t checkFrame(int i) const {
+    if (i < 0 || i >= frames_) {
+      throw Error("synth: frame " + std::to_string(i) + " outside [0, " + std::to_string(frames_) + ")");
+    }
+    return static_cast<std::size_t>(i);
+  }
+
+  // Camera path, head frame, hand plans and per-frame parameters (see the file comment).
+  void plan() {
+    const double duration = static_cast<double>(frames_ - 1) / opt_.fps + 1e-9;
+    SynthRng camRng(seed_, 1);
+    const CameraPath<Scalar> path = makeCameraPath<Scalar>(preset_.motion, scene_->layout, duration, camRng);
+    roomFromCamera_.resize(static_cast<std::size_t>(frames_));
+    for (int i = 0; i < frames_; ++i) roomFromCamera_[static_cast<std::size_t>(i)] = path.at(static_cast<double>(i) / opt_.fps);
+    worldFromRoom_ = roomFromCamera_[0].inverse();
+    // Head frame: exponentially smoothed camera rotation.
+    const double lag = preset_.hands.lagSeconds;
+    const Scalar alpha = lag > 0 ? Scalar(1 - std::exp(-1.0 / (lag * opt_.fps))) : Scalar(1);
+    std::vector<Mat3<Scalar>> head(static_cast<std::size_t>(frames_));
+    Eigen::Quaternion<Scalar> q = matrixToQuaternion(roomFromCamera_[0].R);
+    for (int i = 0; i < frames_; ++i) {
+      Eigen::Quaternion<Scalar> c = matrixToQuaternion(roomFromCamera_[static_cast<std::size_t>(i)].R);
+      if (q.dot(c) < Scalar(0)) c.coeffs() = -c.coeffs();
+      q.coeffs() = (Scalar(1) - alpha) * q.coeffs() + alpha * c.coeffs();
+      q.normalize();
+      head[static_cast<std::size_t>(i)] = q.toRotationMatrix();
+    }
+    // Shape: one person, both hands (random when the model has shape coefficients).
+    SynthRng shapeRng(seed_, 2);
+    VecX<Scalar> betas[2];
+    for (int s = 0; s < 2; ++s) betas[s] = VecX<Scalar>::Zero(models_[static_cast<std::size_t>(s)]->numBetas());
+    for (Eigen::Index k = 0; k < 10; ++k) {
+      const double v = std::max(-1.5, std::min(1.5, 0.7 * shapeRng.normal()));
+      for (int s = 0; s < 2; ++s) {
+        if (k < betas[s].size()) betas[s](k) = Scalar(v);
+      }
+    }
+    for (int s = 0; s < 2; ++s) {
+      SynthRng handRng(seed_, 10 + static_cast<std::uint64_t>(s));
+      const double side = s == kLeftHand ? -1.0 : 1.0;
+      const HandPlan<Scalar> hp = makeHandPlan(*rigs_[static_cast<std::size_t>(s)], preset_.hands, side, duration, handRng);
+      std::vector<HandPose<Scalar>>& out = poses_[static_cast<std::size_t>(s)];
+      out.resize(static_cast<std::size_t>(frames_));
+      HandWorkspace<Scalar> ws;
+      shapeHand(*models_[static_cast<std::size_t>(s)], betas[s], ws);
+      root_[static_cast<std::size_t>(s)] = ws.jRest.row(0).transpose();
+      for (int i = 0; i < frames_; ++i) {
+        const std::size_t fi = static_cast<std::size_t>(i);
+        const HandState<Scalar> st = hp.at(static_cast<double>(i) / opt_.fps);
+        const RigidPose<Scalar>& rc = roomFromCamera_[fi];
+        const Vec3<Scalar> wristRoom = rc.t + head[fi] * st.wrist;
+        const Mat3<Scalar> Rroom = head[fi] * st.R;
+        // World frame: R_w = R_w_room·R_room, wrist_w = T_w_room·wrist_room.
+        out[fi] = rigs_[static_cast<std::size_t>(s)]->pose(worldFromRoom_ * wristRoom, Mat3<Scalar>(worldFromRoom_.R * Rroom),
+                                                            st.gesture, betas[s], ws);
+      }
+    }
+  }
+
+  SynthPreset preset_;
+  std::uint64_t seed_ = 0;
+  SynthOptions opt_;
+  int frames_ = 0;
+  float noise_ = 0;
+  PinholeCamera<Scalar> camera_;
+  std::shared_ptr<const IndoorScene<Scalar>> scene_;
+  std::shared_ptr<const HandModel<Scalar>> models_[2];
+  std::shared_ptr<const HandRig<Scalar>> rigs_[2];
+  std::vector<RigidPose<Scalar>> roomFromCamera_;
+  RigidPose<Scalar> worldFromRoom_;
+  std::vector<HandPose<Scalar>> poses_[2];
+  Vec3<Scalar> root_[2];  ///< J_0(β) per hand
+  // Scratch of renderFrame().
+  std::unique_ptr<SceneRenderer<Scalar>> renderer_;
+  HandWorkspace<Scalar> ws_;
+  HandOutput<Scalar> fwd_;
+  Points3<Scalar> handVerts_[2];
+};
+
+}  // namespace synth
+}  // namespace hawor
