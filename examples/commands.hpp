@@ -8,4 +8,5 @@ int cmdConvertHand(int argc, char** argv);  // hawor convert-hand --glb F --side
 int cmdHand(int argc, char** argv);  // hawor hand --model M [--pose P] --out mesh.obj
 int cmdFit(int argc, char** argv);   // hawor fit --model M --obs K.npz --intrinsics ... --out F
 int cmdSynth(int argc, char** argv);  // hawor synth --preset P --seed N --out DIR | --list
+int cmdSlam(int argc, char** argv);   // hawor slam --images DIR --intrinsics ... --out TRAJ.tum
 }  // namespace hawor_cli

@@ -29,6 +29,8 @@ const char* kUsage =
     "  synth --preset NAME --seed N --out DIR       synthetic egocentric sequence with ground\n"
     "        [--frames N] [--size WxH] [--model ..] truth (RGB, depth, masks, poses, hands);\n"
     "  synth --list                                 --list prints the preset names\n"
+    "  slam --images DIR --intrinsics fx,fy,cx,cy   monocular SLAM with the hands masked out\n"
+    "       [--masks DIR] --out TRAJ.tum            (camera trajectory, keyframe depths)\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -47,6 +49,7 @@ int main(int argc, char** argv) {
     if (cmd == "hand") return hawor_cli::cmdHand(argc, argv);
     if (cmd == "fit") return hawor_cli::cmdFit(argc, argv);
     if (cmd == "synth") return hawor_cli::cmdSynth(argc, argv);
+    if (cmd == "slam") return hawor_cli::cmdSlam(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {

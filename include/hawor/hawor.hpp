@@ -6,6 +6,7 @@
 #include "geometry/geometry.hpp"
 #include "hand/hand.hpp"
 #include "render/render.hpp"
+#include "slam/slam.hpp"
 #include "motion/motion.hpp"
 #include "eval/eval.hpp"
 #include "io/io.hpp"

@@ -12,3 +12,4 @@
 #include "tum.hpp"
 #include "json.hpp"
 #include "gltf.hpp"
+#include "image_file.hpp"

@@ -1,0 +1,212 @@
+// bench_slam — the SLAM benchmark of issue 4: every synthetic preset with and without the dual
+// hand masking, one table: ATE (Sim(3)-aligned mean error, metres and % of the ground-truth path
+// length), ms per frame (median, p95), keyframes, losses, frame statuses, hand coverage.
+// Frames are rendered in memory (no PNG round trip) and fed to both SLAM runs in the same loop,
+// so the masked/unmasked comparison sees identical images and machine load.
+//
+//   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
+//              [--json FILE]
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "hawor/eval/camera_metrics.hpp"
+#include "hawor/hand/default_hand.hpp"
+#include "hawor/hand/load_model.hpp"
+#include "hawor/hand/mirror.hpp"
+#include "hawor/hand/synthetic_hand.hpp"
+#include "hawor/slam/mono_slam.hpp"
+#include "hawor/synth/synth.hpp"
+
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * double(v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(pos);
+  const double a = pos - double(i);
+  return i + 1 < v.size() ? v[i] * (1 - a) + v[i + 1] * a : v[i];
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : s) {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+struct RunStats {
+  std::string preset, mode;
+  int frames = 0;
+  double ateM = 0, atePct = 0, pathM = 0, msMedian = 0, msP95 = 0, finishMs = 0;
+  int keyframes = 0, losses = 0, resets = 0, tracked = 0, interpolated = 0, lost = 0, relocalised = 0;
+  double mb = 0;
+  double coverage30 = 0, maxCoverage = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> presets = hawor::synth::synthPresetNames();
+  int frames = 0, width = 640, height = 480;
+  unsigned long seed = 1;
+  std::string model = "default", jsonPath;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bench_slam: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--presets") {
+      presets = split(next());
+    } else if (a == "--frames") {
+      frames = std::stoi(next());
+    } else if (a == "--size") {
+      const std::string s = next();
+      if (std::sscanf(s.c_str(), "%dx%d", &width, &height) != 2) {
+        std::fprintf(stderr, "bench_slam: --size expects WxH\n");
+        return 2;
+      }
+    } else if (a == "--seed") {
+      seed = std::stoul(next());
+    } else if (a == "--model") {
+      model = next();
+    } else if (a == "--json") {
+      jsonPath = next();
+    } else {
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F]\n");
+      return 2;
+    }
+  }
+  try {
+    hawor::HandModel<double> right, left;
+    if (model == "synthetic") {
+      right = hawor::makeSyntheticHand<double>();
+      left = hawor::mirrorHandModel(right);
+    } else {
+      std::string exe = argv[0];
+      const std::size_t sl = exe.rfind('/');
+      const std::string dir = sl == std::string::npos ? "." : exe.substr(0, sl);
+      const std::vector<std::string> dirs = {dir + "/../models", "node_modules/@webxr-input-profiles/assets/dist/profiles/generic-hand"};
+      try {
+        right = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Right, dirs), hawor::HandSide::Right).model;
+        left = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Left, dirs), hawor::HandSide::Left).model;
+      } catch (const hawor::Error& e) {
+        std::fprintf(stderr, "bench_slam: default hands not found (%s); using the synthetic hand\n", e.what());
+        right = hawor::makeSyntheticHand<double>();
+        left = hawor::mirrorHandModel(right);
+      }
+    }
+    std::vector<RunStats> all;
+    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %5s %5s %5s %22s %6s %6s\n", "preset", "mode", "frames", "ATE[m]",
+                "ATE[%]", "path[m]", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30");
+    for (const std::string& name : presets) {
+      hawor::synth::SynthOptions so;
+      so.width = width;
+      so.height = height;
+      so.frames = frames;
+      hawor::synth::SynthSequence<double> seq(hawor::synth::findSynthPreset(name), seed, left, right, so);
+      const int n = seq.numFrames();
+      hawor::PinholeCamera<double> cam = seq.camera();
+      hawor::SlamOptions<double> om, ou;
+      ou.useMasks = false;
+      hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
+      std::vector<double> tm, tu;
+      hawor::synth::SynthFrame<double> fr;
+      std::vector<hawor::Vec3<double>> gt;
+      int cov30 = 0;
+      double maxCov = 0;
+      for (int i = 0; i < n; ++i) {
+        seq.renderFrame(i, fr);
+        gt.push_back(fr.worldFromCamera.t);
+        cov30 += fr.coverage >= 0.3 ? 1 : 0;
+        maxCov = std::max(maxCov, fr.coverage);
+        auto t0 = std::chrono::steady_clock::now();
+        masked.process(fr.images.rgb, &fr.images.mask);
+        auto t1 = std::chrono::steady_clock::now();
+        plain.process(fr.images.rgb, &fr.images.mask);
+        auto t2 = std::chrono::steady_clock::now();
+        tm.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+        tu.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+      }
+      double path = 0;
+      for (std::size_t i = 1; i < gt.size(); ++i) path += (gt[i] - gt[i - 1]).norm();
+      for (int m = 0; m < 2; ++m) {
+        hawor::MonoSlam<double>& s = m == 0 ? masked : plain;
+        const double bytes = double(s.sequenceBytes());
+        auto t0 = std::chrono::steady_clock::now();
+        const hawor::SlamResult<double> r = s.finish();
+        auto t1 = std::chrono::steady_clock::now();
+        std::vector<hawor::Vec3<double>> est;
+        for (const auto& T : r.poses) est.push_back(T.translation());
+        RunStats st;
+        st.preset = name;
+        st.mode = m == 0 ? "masked" : "unmasked";
+        st.frames = n;
+        st.ateM = hawor::ateSim3(hawor::cameraPositions(gt), hawor::cameraPositions(est)) / 1000.0;
+        st.pathM = path;
+        st.atePct = path > 0 ? 100.0 * st.ateM / path : 0;
+        st.msMedian = percentile(m == 0 ? tm : tu, 0.5);
+        st.msP95 = percentile(m == 0 ? tm : tu, 0.95);
+        st.finishMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
+        st.keyframes = r.numKeyframes;
+        st.losses = r.numLosses;
+        st.resets = r.numResets;
+        st.tracked = r.count(hawor::SlamStatus::Tracked);
+        st.interpolated = r.count(hawor::SlamStatus::Interpolated);
+        st.lost = r.count(hawor::SlamStatus::Lost);
+        st.relocalised = r.count(hawor::SlamStatus::Relocalised);
+        st.mb = bytes / (1024.0 * 1024.0);
+        st.coverage30 = double(cov30) / n;
+        st.maxCoverage = maxCov;
+        char counts[64];
+        std::snprintf(counts, sizeof counts, "%d/%d/%d/%d", st.tracked, st.interpolated, st.lost, st.relocalised);
+        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f\n", name.c_str(),
+                    st.mode.c_str(), n, st.ateM, st.atePct, path, st.msMedian, st.msP95, st.keyframes, st.losses,
+                    st.resets, counts, st.mb, st.coverage30);
+        std::fflush(stdout);
+        all.push_back(st);
+      }
+    }
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    std::printf("peak RSS %.1f MB (whole benchmark process, both runs and the renderer)\n", double(ru.ru_maxrss) / 1024.0);
+    if (!jsonPath.empty()) {
+      std::ofstream o(jsonPath);
+      o << "[\n";
+      for (std::size_t i = 0; i < all.size(); ++i) {
+        const RunStats& s = all[i];
+        o << "  {\"preset\": \"" << s.preset << "\", \"mode\": \"" << s.mode << "\", \"frames\": " << s.frames
+          << ", \"ate_m\": " << s.ateM << ", \"ate_pct\": " << s.atePct << ", \"path_m\": " << s.pathM
+          << ", \"ms_median\": " << s.msMedian << ", \"ms_p95\": " << s.msP95 << ", \"finish_ms\": " << s.finishMs
+          << ", \"keyframes\": " << s.keyframes << ", \"losses\": " << s.losses << ", \"resets\": " << s.resets
+          << ", \"tracked\": " << s.tracked << ", \"interpolated\": " << s.interpolated << ", \"lost\": " << s.lost
+          << ", \"relocalised\": " << s.relocalised << ", \"sequence_mb\": " << s.mb
+          << ", \"hand_coverage_ge30_fraction\": " << s.coverage30 << ", \"max_hand_coverage\": " << s.maxCoverage << "}"
+          << (i + 1 < all.size() ? ",\n" : "\n");
+      }
+      o << "]\n";
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_slam: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

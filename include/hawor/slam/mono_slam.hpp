@@ -1,0 +1,1024 @@
+// hawor/slam/mono_slam.hpp — sparse monocular SLAM with dual hand masking (DESIGN §5): the
+// camera trajectory of the method, CPU- and WASM-friendly in place of DROID-SLAM.
+//
+// Per frame (process):
+//   1. Gaussian pyramid of the grey image (image_pyramid.hpp); the hand mask, dilated
+//      (hand_mask.hpp).
+//   2. Pyramidal KLT of every live track from the previous frame (klt.hpp), started at the
+//      projection of its map point under a constant-velocity pose prediction (fast head turns).
+//      FRONT-END MASKING: a track that lands on the dilated hand mask is dropped, and no corner
+//      is ever detected there (corners.hpp).
+//   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
+//      between a reference frame and the current one once the median flow is large enough; the
+//      rotation of not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
+//      hypothesis) with the position held.
+//      With a map: the pose by P3P-RANSAC + robust LM on the tracks' map points (pnp_ransac.hpp).
+//   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
+//      an absolute count, or after a maximum interval. At a keyframe: new points are triangulated
+//      from tracks seen in two keyframes with enough parallax (triangulation.hpp), a
+//      sliding-window bundle adjustment runs (bundle_adjustment.hpp: LM, Schur complement,
+//      Huber loss) and new corners fill the empty cells of the bucketing grid.
+//      BACK-END MASKING: a bundle-adjustment residual whose measured pixel or current projection
+//      lands on the keyframe's hand mask gets weight 0.
+//   5. Tracking loss (too few PnP inliers): the frame is Lost, its rotation still follows the
+//      tracked rays; after lostFramesBeforeReset lost frames the system re-initialises a new map
+//      segment from the current frame and joins it to the old world at the frame where tracking
+//      was lost: rotation from the ray chain, position from the last estimate, scale so that the
+//      median scene depth is continuous across the join. (No place recognition: a segment that
+//      later sees the old map again is not merged with it.)
+// finish(): a global bundle adjustment over all keyframes and points (per segment: first keyframe
+// fixed, a scale prior on its first baseline), then every frame's pose re-estimated against the
+// final map from its stored 2D observations (RANSAC for frames without a tracked pose, robust LM
+// otherwise); frames that still have no pose get one interpolated between their neighbours.
+// Output frame: camera-to-world poses (DESIGN §2) with the world = the first frame's camera,
+// monocular scale (the first baseline is 1 in the map's units); per-keyframe sparse depths
+// (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (DESIGN §6).
+// Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
+// a track) and, per keyframe, a 1/4-resolution mask bitmap; no images are kept.
+// Not thread-safe; one instance per video.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hawor/common.hpp"
+#include "hawor/geometry/camera.hpp"
+#include "hawor/geometry/interpolate.hpp"
+#include "hawor/geometry/se3.hpp"
+#include "hawor/render/image.hpp"
+#include "hawor/slam/bundle_adjustment.hpp"
+#include "hawor/slam/corners.hpp"
+#include "hawor/slam/hand_mask.hpp"
+#include "hawor/slam/image_pyramid.hpp"
+#include "hawor/slam/klt.hpp"
+#include "hawor/slam/pnp_ransac.hpp"
+#include "hawor/slam/triangulation.hpp"
+#include "hawor/slam/two_view.hpp"
+
+namespace hawor {
+
+/// Per-frame status of the SLAM output.
+enum class SlamStatus : int {
+  Tracked = 0,       ///< pose from the frame's features against the map
+  Interpolated = 1,  ///< no map pose: rotation from the tracked rays or interpolation, position held/interpolated
+  Lost = 2,          ///< tracking was lost here; the pose is interpolated between good frames
+  Relocalised = 3,   ///< first tracked frame of a re-initialised map segment joined to the old world
+};
+
+inline const char* slamStatusName(SlamStatus s) {
+  switch (s) {
+    case SlamStatus::Tracked: return "tracked";
+    case SlamStatus::Interpolated: return "interpolated";
+    case SlamStatus::Lost: return "lost";
+    case SlamStatus::Relocalised: return "relocalised";
+  }
+  return "unknown";
+}
+
+template <typename Scalar>
+struct SlamOptions {
+  int pyramidLevels = 4;
+  KltOptions klt;
+  CornerOptions corners;
+  int maxFeatures = 350;            ///< live tracks after replenishing at a keyframe
+  bool useMasks = true;             ///< dual hand masking (false: masks are ignored, the ablation)
+  int maskDilatePx = 6;             ///< front-end dilation of the hand mask
+  int maskBlock = 4;                ///< keyframe mask resolution (pixels per bit)
+  // Initialisation.
+  TwoViewOptions<Scalar> twoView;
+  Scalar initMinFlowPx = Scalar(4);   ///< median rotation-compensated flow before trying
+  int initEveryFrames = 3;            ///< frames between two-view attempts
+  int initMinTracks = 60;
+  // Tracking.
+  PnPRansacOptions<Scalar> pnp;
+  int minInliers = 25;
+  int lostFramesBeforeReset = 4;
+  // Keyframes and mapping.
+  Scalar keyframeInlierRatio = Scalar(0.7);
+  int keyframeMinInliers = 60;
+  int keyframeMaxInterval = 10;
+  int keyframeMinInterval = 3;
+  Scalar minTriangulationDeg = Scalar(0.6);
+  Scalar maxReprojPx = Scalar(3);
+  int windowKeyframes = 7;
+  int localIterations = 8;
+  int globalIterations = 25;
+  bool globalBundleAdjustment = true;
+  bool refineFrames = true;         ///< finish(): re-estimate every frame against the final map
+  /// Optional diagnostics sink (one line per event: initialisation attempts, losses, resets).
+  std::function<void(const std::string&)> log;
+
+  SlamOptions() {
+    pnp.thresholdPx = Scalar(3);
+    pnp.maxIterations = 200;
+    pnp.refinement.maxIterations = 6;
+    twoView.maxIterations = 300;
+  }
+};
+
+/// Sparse depths of one keyframe for the scale step: pixels and depths along the optical axis
+/// (map units), of the map points it observes outside the hand masks.
+template <typename Scalar>
+struct SlamKeyframeDepths {
+  int frame = 0;
+  std::vector<Vec2<Scalar>> uv;
+  std::vector<Scalar> depth;
+};
+
+template <typename Scalar>
+struct SlamResult {
+  std::vector<SE3<Scalar>> poses;     ///< T_w_c per frame, world = first frame's camera
+  std::vector<SlamStatus> status;     ///< per frame
+  std::vector<char> keyframe;         ///< per frame
+  std::vector<int> inliers;           ///< per frame: PnP inliers (0 without a map pose)
+  std::vector<SlamKeyframeDepths<Scalar>> keyframeDepths;
+  std::vector<Vec3<Scalar>> points;   ///< final map points (world)
+  int numKeyframes = 0;
+  int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
+  int numResets = 0;                  ///< map re-initialisations
+  bool initialised = false;           ///< a map was ever built (false: rotation-only output)
+  int count(SlamStatus s) const {
+    int n = 0;
+    for (SlamStatus t : status) n += t == s ? 1 : 0;
+    return n;
+  }
+};
+
+template <typename Scalar>
+class MonoSlam {
+ public:
+  using V2 = Vec2<Scalar>;
+  using V3 = Vec3<Scalar>;
+  using SE3T = SE3<Scalar>;
+
+  MonoSlam(const PinholeCamera<Scalar>& camera, const SlamOptions<Scalar>& options = {})
+      : cam_(camera), opt_(options) {
+    if (!(cam_.fx > Scalar(0)) || !(cam_.fy > Scalar(0)) || !std::isfinite(double(cam_.fx)) ||
+        !std::isfinite(double(cam_.fy)) || !std::isfinite(double(cam_.cx)) || !std::isfinite(double(cam_.cy))) {
+      throw Error("MonoSlam: the intrinsics must be finite with fx, fy > 0");
+    }
+    if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
+        opt_.keyframeMaxInterval < 1 || opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
+        opt_.maskBlock < 1) {
+      throw Error("MonoSlam: invalid options");
+    }
+    opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
+  }
+
+  /// Processes the next frame (8-bit grey or RGB(A)); `mask` may be null (no hands) or an 8-bit
+  /// image of the same size, hand pixels non-zero. Returns the frame's provisional status.
+  /// Throws hawor::Error for an empty image, a size different from the first frame's, or a mask
+  /// of the wrong size; a textureless or fully masked frame is simply not tracked.
+  SlamStatus process(const ImageU8& image, const ImageU8* mask = nullptr) {
+    if (finished_) throw Error("MonoSlam: process() after finish()");
+    if (!image.consistent() || image.width <= 0 || image.height <= 0) {
+      throw Error("MonoSlam: frame " + std::to_string(frames_.size()) + " is empty");
+    }
+    if (frames_.empty()) {
+      width_ = image.width, height_ = image.height;
+    } else if (image.width != width_ || image.height != height_) {
+      throw Error("MonoSlam: frame " + std::to_string(frames_.size()) + " is " + std::to_string(image.width) +
+                  "x" + std::to_string(image.height) + " but the first frame was " + std::to_string(width_) +
+                  "x" + std::to_string(height_));
+    }
+    std::swap(prevPyr_, curPyr_);
+    curPyr_.build(image, opt_.pyramidLevels);
+    hasMask_ = false;
+    if (mask && opt_.useMasks) {
+      binaryHandMask(*mask, width_, height_, curMask_);
+      dilateMask(curMask_, opt_.maskDilatePx, maskTmp_);
+      hasMask_ = true;
+    } else if (mask) {
+      binaryHandMask(*mask, width_, height_, curMask_);  // size check only
+    }
+    const int f = static_cast<int>(frames_.size());
+    frames_.emplace_back();
+    Frame& fr = frames_.back();
+    fr.T = frames_.size() > 1 ? frames_[frames_.size() - 2].T : SE3T();
+
+    if (f == 0) {
+      setReference(0);
+      recordObservations(fr);
+      return fr.status;
+    }
+    trackFeatures(f);
+    if (state_ != State::Tracking) {
+      initialise(f);
+    } else {
+      trackPose(f);
+    }
+    recordObservations(frames_.back());
+    return frames_.back().status;
+  }
+
+  /// Global bundle adjustment, per-frame refinement, interpolation of the remaining frames, and
+  /// the result in the first frame's world. Call once, after the last frame.
+  SlamResult<Scalar> finish() {
+    if (finished_) throw Error("MonoSlam: finish() called twice");
+    finished_ = true;
+    SlamResult<Scalar> res;
+    const int n = static_cast<int>(frames_.size());
+    if (n == 0) return res;
+    if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
+      std::vector<int> all(keyframes_.size());
+      for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+      adjust(all, opt_.globalIterations, true);
+      for (std::size_t k = 0; k < keyframes_.size(); ++k) frames_[static_cast<std::size_t>(keyframes_[k].frame)].T = keyframes_[k].T;
+    }
+    if (opt_.refineFrames && !points_.empty()) refineAllFrames();
+    fillUnposed();
+    // Express everything in the first frame's camera.
+    const SE3T T0inv = frames_[0].T.inverse();
+    res.poses.resize(static_cast<std::size_t>(n));
+    res.status.resize(static_cast<std::size_t>(n));
+    res.keyframe.resize(static_cast<std::size_t>(n), 0);
+    res.inliers.resize(static_cast<std::size_t>(n), 0);
+    for (int i = 0; i < n; ++i) {
+      const Frame& fr = frames_[static_cast<std::size_t>(i)];
+      res.poses[static_cast<std::size_t>(i)] = T0inv * fr.T;
+      res.status[static_cast<std::size_t>(i)] = fr.status;
+      res.inliers[static_cast<std::size_t>(i)] = fr.inliers;
+    }
+    for (const Keyframe& kf : keyframes_) res.keyframe[static_cast<std::size_t>(kf.frame)] = 1;
+    for (const MapPoint& p : points_) {
+      if (p.valid) res.points.push_back(T0inv * p.X);
+    }
+    // Keyframe depths (camera z does not depend on the world frame).
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      SlamKeyframeDepths<Scalar> d;
+      d.frame = keyframes_[k].frame;
+      const SE3T Tcw = keyframes_[k].T.inverse();
+      for (int pid : keyframes_[k].points) {
+        const MapPoint& p = points_[static_cast<std::size_t>(pid)];
+        if (!p.valid) continue;
+        for (const Obs& o : p.obs) {
+          if (o.kf != static_cast<int>(k)) continue;
+          if (keyframes_[k].mask.test(o.uv(0), o.uv(1))) break;
+          const V3 Xc = Tcw * p.X;
+          if (Xc(2) > Scalar(0)) {
+            d.uv.push_back(o.uv);
+            d.depth.push_back(Xc(2));
+          }
+          break;
+        }
+      }
+      res.keyframeDepths.push_back(std::move(d));
+    }
+    res.numKeyframes = static_cast<int>(keyframes_.size());
+    res.numLosses = losses_;
+    res.numResets = resets_;
+    res.initialised = everInitialised_;
+    return res;
+  }
+
+  int numFrames() const { return static_cast<int>(frames_.size()); }
+  int numKeyframes() const { return static_cast<int>(keyframes_.size()); }
+  int numLiveTracks() const { return static_cast<int>(tracks_.size()); }
+  /// Bytes held for the whole sequence (observations, map, keyframe masks), excluding the two
+  /// pyramids and scratch buffers.
+  std::size_t sequenceBytes() const {
+    std::size_t b = frames_.size() * sizeof(Frame);
+    for (const Frame& f : frames_) b += f.obsTrack.capacity() * sizeof(int) + f.obsUv.capacity() * sizeof(Vec2f);
+    for (const Keyframe& k : keyframes_) b += sizeof(Keyframe) + k.mask.bytes() + k.points.capacity() * sizeof(int);
+    for (const MapPoint& p : points_) b += sizeof(MapPoint) + p.obs.capacity() * sizeof(Obs);
+    b += trackPoint_.capacity() * sizeof(int);
+    return b;
+  }
+
+ private:
+  enum class State { Initialising, Tracking };
+  using Vec2f = Eigen::Matrix<float, 2, 1, Eigen::DontAlign>;
+
+  struct Obs {
+    int kf;
+    V2 uv;
+  };
+  struct MapPoint {
+    V3 X;
+    std::vector<Obs> obs;
+    bool valid = true;
+    int segment = 0;
+  };
+  struct Track {
+    int id;
+    Vec2f uv = Vec2f::Zero();
+    int point = -1;
+    std::vector<Obs> kfObs;  ///< keyframe observations while unmapped
+    Vec2f refUv = Vec2f::Zero();  ///< position in the initialisation reference frame
+    bool fromRef = false;
+  };
+  struct Keyframe {
+    int frame;
+    SE3T T;
+    CoarseMask mask;
+    std::vector<int> points;  ///< map points it observes
+    int segment;
+  };
+  struct Frame {
+    SE3T T;
+    SlamStatus status = SlamStatus::Interpolated;
+    bool posed = false;        ///< T comes from a map (tracked) rather than a guess
+    bool rotationKnown = true; ///< rotation from rays/tracking (false: only interpolate)
+    int inliers = 0;
+    int segment = 0;
+    std::vector<int> obsTrack;
+    std::vector<Vec2f> obsUv;
+  };
+
+  // ---------------------------------------------------------------- front end
+  V2 normalised(const Vec2f& uv) const {
+    return V2((Scalar(uv(0)) - cam_.cx) / cam_.fx, (Scalar(uv(1)) - cam_.cy) / cam_.fy);
+  }
+  bool masked(const Vec2f& uv) const {
+    if (!hasMask_) return false;
+    const int x = int(std::floor(uv(0) + 0.5f)), y = int(std::floor(uv(1) + 0.5f));
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return false;
+    return curMask_.at(x, y) != 0;
+  }
+  bool insideImage(const Vec2f& uv, float margin) const {
+    return uv(0) >= margin && uv(1) >= margin && uv(0) <= float(width_ - 1) - margin &&
+           uv(1) <= float(height_ - 1) - margin;
+  }
+
+  void trackFeatures(int f) {
+    // Constant-velocity prediction (c2w): T_pred = T_{f-1}·(T_{f-2}⁻¹·T_{f-1}).
+    const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
+    havePrediction_ = false;
+    if (state_ == State::Tracking && f >= 2 && frames_[static_cast<std::size_t>(f - 2)].posed && p1.posed) {
+      const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
+      predicted_ = p1.T * (p2.T.inverse() * p1.T);
+      havePrediction_ = true;
+    } else {
+      predicted_ = p1.T;
+    }
+    from_.resize(tracks_.size());
+    to_.resize(tracks_.size());
+    float sdx = 0, sdy = 0;
+    int npred = 0;
+    std::vector<char> hasGuess(tracks_.size(), 0);
+    if (havePrediction_) {
+      const SE3T Tcw = predicted_.inverse();
+      for (std::size_t i = 0; i < tracks_.size(); ++i) {
+        const Track& t = tracks_[i];
+        if (t.point < 0) continue;
+        const V3 Xc = Tcw * points_[static_cast<std::size_t>(t.point)].X;
+        if (!(Xc(2) > Scalar(0))) continue;
+        const V2 q = cam_.project(Xc);
+        const Vec2f g(float(q(0)), float(q(1)));
+        if (!std::isfinite(g(0)) || !std::isfinite(g(1)) || !insideImage(g, -50.0f)) continue;
+        to_[i] = g;
+        hasGuess[i] = 1;
+        sdx += g(0) - t.uv(0), sdy += g(1) - t.uv(1);
+        ++npred;
+      }
+    }
+    const float mx = npred ? sdx / float(npred) : 0.0f, my = npred ? sdy / float(npred) : 0.0f;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      from_[i] = tracks_[i].uv;
+      if (!hasGuess[i]) to_[i] = Vec2f(tracks_[i].uv(0) + mx, tracks_[i].uv(1) + my);
+    }
+    trackKlt(prevPyr_, curPyr_, from_, to_, ok_, opt_.klt);
+    std::size_t w = 0;
+    const float margin = float(opt_.klt.halfWindow + 1);
+    prevUv_.clear();
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (!ok_[i] || !insideImage(to_[i], margin) || masked(to_[i])) continue;
+      prevUv_.push_back(tracks_[i].uv);
+      if (w != i) tracks_[w] = std::move(tracks_[i]);  // (a self-move would empty kfObs)
+      tracks_[w].uv = to_[i];
+      ++w;
+    }
+    tracks_.resize(w);
+  }
+
+  /// New tracks in the empty cells of the bucketing grid (never on the dilated hand mask).
+  void replenish() {
+    const int want = opt_.maxFeatures - static_cast<int>(tracks_.size());
+    if (want <= 0) return;
+    existing_.clear();
+    for (const Track& t : tracks_) existing_.push_back(t.uv);
+    fresh_.clear();
+    detectCorners(curPyr_.level(0), hasMask_ ? &curMask_ : nullptr, existing_, want, opt_.corners, fresh_, cornerScratch_);
+    for (const Vec2f& p : fresh_) {
+      Track t;
+      t.id = static_cast<int>(trackPoint_.size());
+      trackPoint_.push_back(-1);
+      t.uv = p;
+      tracks_.push_back(std::move(t));
+    }
+  }
+
+  /// Frame f becomes the reference of the two-view initialisation (tracks replenished first).
+  void setReference(int f) {
+    replenish();
+    refFrame_ = f;
+    refMask_ = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
+    for (Track& t : tracks_) {
+      t.refUv = t.uv;
+      t.fromRef = true;
+    }
+    refTracks_ = static_cast<int>(tracks_.size());
+  }
+
+  void recordObservations(Frame& fr) {
+    fr.obsTrack.resize(tracks_.size());
+    fr.obsUv.resize(tracks_.size());
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      fr.obsTrack[i] = tracks_[i].id;
+      fr.obsUv[i] = tracks_[i].uv;
+    }
+    fr.obsTrack.shrink_to_fit();
+    fr.obsUv.shrink_to_fit();
+  }
+
+  /// Rotation of the current frame relative to the previous one from the tracked rays (Kabsch
+  /// with one re-weighting pass that drops rays more than 3° off), as a c2w increment.
+  bool rayRotation(Mat3<Scalar>& Rprev_cur) {
+    std::vector<V2> a, b;
+    a.reserve(tracks_.size());
+    b.reserve(tracks_.size());
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      a.push_back(normalised(prevUv_[i]));
+      b.push_back(normalised(tracks_[i].uv));
+    }
+    if (a.size() < 8) return false;
+    std::vector<char> inl(a.size(), 1);
+    Mat3<Scalar> R = two_view_detail::rotationFromRays(a, b, inl, Mat3<Scalar>(Mat3<Scalar>::Identity()));
+    const Scalar cosT = std::cos(Scalar(3) * Constants<Scalar>::pi() / Scalar(180));
+    int kept = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const V3 f1 = (R * V3(a[i](0), a[i](1), Scalar(1))).normalized();
+      const V3 f2 = V3(b[i](0), b[i](1), Scalar(1)).normalized();
+      inl[i] = f1.dot(f2) >= cosT ? 1 : 0;
+      kept += inl[i];
+    }
+    if (kept < 8) return false;
+    R = two_view_detail::rotationFromRays(a, b, inl, R);
+    // rotationFromRays gives R21 (f2 ≈ R21·f1): camera 1 → camera 2 for directions, so
+    // R_c1_c2 (c2w increment) = R21ᵀ.
+    Rprev_cur = R.transpose();
+    return true;
+  }
+
+  // ---------------------------------------------------------------- initialisation
+  void initialise(int f) {
+    Frame& fr = frames_.back();
+    fr.segment = segment_;
+    // Rotation-only pose from the ray chain (position held).
+    Mat3<Scalar> dR;
+    if (rayRotation(dR)) {
+      fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(frames_[static_cast<std::size_t>(f - 1)].T.rotationMatrix() * dR)),
+                  frames_[static_cast<std::size_t>(f - 1)].T.translation());
+    } else {
+      fr.rotationKnown = false;
+    }
+    fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
+    // Correspondences with the reference frame.
+    std::vector<V2> x1, x2;
+    std::vector<int> idx;
+    std::vector<float> flow;
+    const Mat3<Scalar> Rrc = frames_[static_cast<std::size_t>(refFrame_)].T.rotationMatrix().transpose() * fr.T.rotationMatrix();
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (!tracks_[i].fromRef) continue;
+      x1.push_back(normalised(tracks_[i].refUv));
+      x2.push_back(normalised(tracks_[i].uv));
+      idx.push_back(static_cast<int>(i));
+      // Rotation-compensated flow: where the reference ray lands under the rotation alone.
+      const V3 r = Rrc.transpose() * V3(x1.back()(0), x1.back()(1), Scalar(1));
+      if (r(2) > Scalar(0)) {
+        const float du = float(cam_.fx * (r(0) / r(2) - x2.back()(0)));
+        const float dv = float(cam_.fy * (r(1) / r(2) - x2.back()(1)));
+        flow.push_back(std::sqrt(du * du + dv * dv));
+      }
+    }
+    const int alive = static_cast<int>(x1.size());
+    float medFlow = 0;
+    if (!flow.empty()) {
+      std::nth_element(flow.begin(), flow.begin() + static_cast<std::ptrdiff_t>(flow.size() / 2), flow.end());
+      medFlow = flow[flow.size() / 2];
+    }
+    if (alive >= opt_.initMinTracks && medFlow >= float(opt_.initMinFlowPx) && f - lastInitAttempt_ >= opt_.initEveryFrames) {
+      lastInitAttempt_ = f;
+      TwoViewOptions<Scalar> tvo = opt_.twoView;
+      tvo.seed = opt_.twoView.seed + static_cast<std::uint32_t>(f);
+      const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo);
+      if (opt_.log) {
+        opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(refFrame_) + ", " +
+                 std::to_string(alive) + " tracks, flow " + std::to_string(medFlow) + " px: status " +
+                 std::to_string(int(tv.status)) + " model " + std::to_string(int(tv.model)) + " inliers " +
+                 std::to_string(tv.numInliers) + " triangulated " + std::to_string(tv.numTriangulated) +
+                 " parallax " + std::to_string(double(tv.medianParallaxDeg)));
+      }
+      if (tv.ok()) {
+        buildMap(f, tv, idx);
+        return;
+      }
+    }
+    // Too few reference tracks left: restart from this frame.
+    if (alive < std::max(opt_.initMinTracks, refTracks_ / 4)) {
+      if (opt_.log) {
+        opt_.log("frame " + std::to_string(f) + ": new initialisation reference (" + std::to_string(alive) +
+                 " tracks left, flow " + std::to_string(medFlow) + " px)");
+      }
+      setReference(f);
+    }
+  }
+
+  void buildMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx) {
+    const int seg = segment_;
+    const SE3T Tref = frames_[static_cast<std::size_t>(refFrame_)].T;  // provisional world of the ref frame
+    // The two-view map lives in the reference camera's frame with a unit baseline. Join it to
+    // the existing world (first map: the reference frame's provisional pose, scale 1; after a
+    // loss: scale from the median scene depth of the last map, DESIGN §5).
+    Scalar s = Scalar(1);
+    if (everInitialised_ && lastMedianDepth_ > Scalar(0)) {
+      std::vector<Scalar> d;
+      for (std::size_t j = 0; j < idx.size(); ++j) {
+        if (tv.triangulated[j] && tv.points[j](2) > Scalar(0)) d.push_back(tv.points[j](2));
+      }
+      if (!d.empty()) {
+        std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+        s = lastMedianDepth_ / d[d.size() / 2];
+      }
+    }
+    auto toWorld = [&](const V3& x) { return V3(Tref * V3(s * x)); };
+    SE3T T1 = Tref * SE3T(tv.T_c1_c2.rotation(), V3(s * tv.T_c1_c2.translation()));
+    const int k0 = static_cast<int>(keyframes_.size());
+    keyframes_.push_back(Keyframe{refFrame_, Tref, refMask_, {}, seg});
+    keyframes_.push_back(Keyframe{f, T1, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, seg});
+    for (std::size_t j = 0; j < idx.size(); ++j) {
+      Track& t = tracks_[static_cast<std::size_t>(idx[j])];
+      const V2 u0(Scalar(t.refUv(0)), Scalar(t.refUv(1))), u1(Scalar(t.uv(0)), Scalar(t.uv(1)));
+      if (tv.triangulated[j]) {
+        MapPoint p;
+        p.X = toWorld(tv.points[j]);
+        p.obs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
+        p.segment = seg;
+        t.point = addPoint(std::move(p), t.id);
+      } else {
+        t.kfObs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
+      }
+    }
+    for (Track& t : tracks_) t.fromRef = false;
+    Frame& fr = frames_.back();
+    fr.T = T1;
+    fr.posed = true;
+    fr.status = everInitialised_ ? SlamStatus::Relocalised : SlamStatus::Tracked;
+    frames_[static_cast<std::size_t>(refFrame_)].T = Tref;
+    frames_[static_cast<std::size_t>(refFrame_)].posed = true;
+    // Frames between: interpolated for now (refined against the map in finish()).
+    for (int g = refFrame_ + 1; g < f; ++g) {
+      const Scalar a = Scalar(g - refFrame_) / Scalar(f - refFrame_);
+      Frame& m = frames_[static_cast<std::size_t>(g)];
+      m.T = SE3T(m.rotationKnown ? m.T.rotation() : interpolate(Tref.rotation(), T1.rotation(), a),
+                 V3((Scalar(1) - a) * Tref.translation() + a * T1.translation()));
+    }
+    state_ = State::Tracking;
+    everInitialised_ = true;
+    afterLoss_ = false;
+    lost_ = 0;
+    adjust(lastWindow(), opt_.localIterations, false);
+    fr.T = keyframes_.back().T;
+    lastKfInliers_ = countMapped();
+    framesSinceKf_ = 0;
+    replenish();
+    for (Track& t : tracks_) {
+      if (t.point < 0 && t.kfObs.empty()) t.kfObs = {Obs{k0 + 1, V2(Scalar(t.uv(0)), Scalar(t.uv(1)))}};
+    }
+    updateMedianDepth();
+  }
+
+  // ---------------------------------------------------------------- tracking
+  int countMapped() const {
+    int n = 0;
+    for (const Track& t : tracks_) n += t.point >= 0 ? 1 : 0;
+    return n;
+  }
+
+  void trackPose(int f) {
+    Frame& fr = frames_.back();
+    fr.segment = segment_;
+    std::vector<V3> X;
+    std::vector<V2> uv;
+    std::vector<int> ti;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (tracks_[i].point < 0) continue;
+      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
+      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
+      ti.push_back(static_cast<int>(i));
+    }
+    bool ok = false;
+    if (static_cast<int>(X.size()) >= opt_.minInliers) {
+      PnPRansacOptions<Scalar> po = opt_.pnp;
+      po.seed = opt_.pnp.seed + static_cast<std::uint32_t>(f);
+      po.minInliers = opt_.minInliers;
+      const PnPRansacResult<Scalar> r = solvePnPRansac(X, uv, cam_, po);
+      if (r.ok()) {
+        ok = true;
+        fr.T = r.T_w_c;
+        fr.inliers = r.numInliers;
+        // An outlier track has drifted off its point: drop it (a new corner replaces it).
+        std::vector<char> drop(tracks_.size(), 0);
+        for (std::size_t j = 0; j < ti.size(); ++j) {
+          if (!r.inliers[j]) drop[static_cast<std::size_t>(ti[j])] = 1;
+        }
+        removeTracks(drop);
+      }
+    }
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": pnp " + std::to_string(X.size()) + " mapped tracks, " +
+               std::to_string(ok ? fr.inliers : 0) + " inliers, " + std::to_string(tracks_.size()) + " tracks");
+    }
+    if (ok) {
+      fr.posed = true;
+      fr.status = SlamStatus::Tracked;
+      if (lost_ > 0) ++recovered_;
+      lost_ = 0;
+      ++framesSinceKf_;
+      const int mapped = fr.inliers;
+      // A keyframe when the map thins out (but not more often than keyframeMinInterval unless
+      // tracking is about to fail) or after keyframeMaxInterval frames.
+      const bool thin = mapped < opt_.keyframeMinInliers || Scalar(mapped) < opt_.keyframeInlierRatio * Scalar(lastKfInliers_);
+      if (framesSinceKf_ >= opt_.keyframeMaxInterval || (thin && framesSinceKf_ >= opt_.keyframeMinInterval) ||
+          mapped < 2 * opt_.minInliers) {
+        insertKeyframe(f);
+      }
+      return;
+    }
+    // Lost: rotation from the rays, position held; after a few frames, a new map segment.
+    if (lost_ == 0) ++losses_;
+    ++lost_;
+    fr.status = SlamStatus::Lost;
+    fr.posed = false;
+    Mat3<Scalar> dR;
+    const Frame& prev = frames_[static_cast<std::size_t>(f - 1)];
+    if (rayRotation(dR)) {
+      fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(prev.T.rotationMatrix() * dR)), prev.T.translation());
+    } else {
+      fr.T = prev.T;
+      fr.rotationKnown = false;
+    }
+    if (lost_ >= opt_.lostFramesBeforeReset) {
+      state_ = State::Initialising;
+      afterLoss_ = true;
+      ++resets_;
+      ++segment_;
+      // The tracks go on, under new ids: their old observations keep mapping to the old points.
+      for (Track& t : tracks_) {
+        t.point = -1;
+        t.kfObs.clear();
+        t.id = static_cast<int>(trackPoint_.size());
+        trackPoint_.push_back(-1);
+      }
+      setReference(f);
+    }
+  }
+
+  int addPoint(MapPoint&& p, int trackId) {
+    const int id = static_cast<int>(points_.size());
+    for (const Obs& o : p.obs) keyframes_[static_cast<std::size_t>(o.kf)].points.push_back(id);
+    points_.push_back(std::move(p));
+    trackPoint_[static_cast<std::size_t>(trackId)] = id;
+    return id;
+  }
+
+  void insertKeyframe(int f) {
+    Frame& fr = frames_.back();
+    const int k = static_cast<int>(keyframes_.size());
+    keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_});
+    const SE3T Tcw = fr.T.inverse();
+    const Scalar cosMin = std::cos(opt_.minTriangulationDeg * Constants<Scalar>::pi() / Scalar(180));
+    const Scalar maxErr2 = opt_.maxReprojPx * opt_.maxReprojPx;
+    int triCand = 0, triParallax = 0, triNew = 0;
+    for (Track& t : tracks_) {
+      const V2 u(Scalar(t.uv(0)), Scalar(t.uv(1)));
+      if (t.point >= 0) {
+        points_[static_cast<std::size_t>(t.point)].obs.push_back(Obs{k, u});
+        keyframes_.back().points.push_back(t.point);
+        continue;
+      }
+      t.kfObs.push_back(Obs{k, u});
+      if (t.kfObs.size() < 2) continue;
+      // Triangulate from the first keyframe observation and this one.
+      const Obs& o0 = t.kfObs.front();
+      const SE3T T0cw = keyframes_[static_cast<std::size_t>(o0.kf)].T.inverse();
+      const V2 x0 = normalised(Vec2f(float(o0.uv(0)), float(o0.uv(1))));
+      const V2 x1 = normalised(t.uv);
+      const V3 r0 = keyframes_[static_cast<std::size_t>(o0.kf)].T.rotationMatrix() * V3(x0(0), x0(1), Scalar(1));
+      const V3 r1 = fr.T.rotationMatrix() * V3(x1(0), x1(1), Scalar(1));
+      ++triCand;
+      if (r0.normalized().dot(r1.normalized()) > cosMin) continue;  // not enough parallax yet
+      ++triParallax;
+      V3 X;
+      if (!triangulateDLT(T0cw, Tcw, x0, x1, X)) continue;
+      bool good = true;
+      for (const Obs& o : t.kfObs) {
+        const V3 Xc = keyframes_[static_cast<std::size_t>(o.kf)].T.inverse() * X;
+        if (!(Xc(2) > Scalar(0))) {
+          good = false;
+          break;
+        }
+        if ((cam_.project(Xc) - o.uv).squaredNorm() > maxErr2) {
+          good = false;
+          break;
+        }
+      }
+      if (!good) continue;
+      ++triNew;
+      MapPoint p;
+      p.X = X;
+      p.obs = t.kfObs;
+      p.segment = segment_;
+      t.point = addPoint(std::move(p), t.id);
+      t.kfObs.clear();
+    }
+    const int before = countMapped();
+    adjust(lastWindow(), opt_.localIterations, false);
+    fr.T = keyframes_.back().T;
+    lastKfInliers_ = countMapped();
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": keyframe " + std::to_string(k) + ", mapped tracks " +
+               std::to_string(before) + " -> " + std::to_string(lastKfInliers_) + " after bundle adjustment; " +
+               "triangulation: " + std::to_string(triCand) + " candidates, " + std::to_string(triParallax) +
+               " with parallax, " + std::to_string(triNew) + " new points");
+    }
+    framesSinceKf_ = 0;
+    replenish();
+    for (Track& t : tracks_) {
+      if (t.point < 0 && t.kfObs.empty()) t.kfObs = {Obs{k, V2(Scalar(t.uv(0)), Scalar(t.uv(1)))}};
+    }
+    updateMedianDepth();
+  }
+
+  void updateMedianDepth() {
+    const Keyframe& kf = keyframes_.back();
+    const SE3T Tcw = kf.T.inverse();
+    std::vector<Scalar> d;
+    for (int pid : kf.points) {
+      const MapPoint& p = points_[static_cast<std::size_t>(pid)];
+      if (!p.valid) continue;
+      const V3 Xc = Tcw * p.X;
+      if (Xc(2) > Scalar(0)) d.push_back(Xc(2));
+    }
+    if (d.size() >= 10) {
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+      lastMedianDepth_ = d[d.size() / 2];
+    }
+  }
+
+  std::vector<int> lastWindow() const {
+    std::vector<int> w;
+    for (int k = static_cast<int>(keyframes_.size()) - 1; k >= 0 && static_cast<int>(w.size()) < opt_.windowKeyframes; --k) {
+      if (keyframes_[static_cast<std::size_t>(k)].segment != segment_) break;
+      w.push_back(k);
+    }
+    std::reverse(w.begin(), w.end());
+    return w;
+  }
+
+  // ---------------------------------------------------------------- bundle adjustment
+  /// Bundle adjustment of the keyframes `window` (free) and their points; keyframes outside the
+  /// window that see those points are fixed. Gauge: the first keyframe of each segment is fixed
+  /// and its first baseline held by a scale prior when no other fixed keyframe anchors the scale.
+  void adjust(const std::vector<int>& window, int iterations, bool global) {
+    if (window.empty()) return;
+    std::vector<int> kfVar(keyframes_.size(), -1), ptVar(points_.size(), -1);
+    BAProblem<Scalar> P;
+    P.camera = cam_;
+    std::vector<int> kfOf, ptOf;
+    auto addKf = [&](int k, bool fixed) {
+      if (kfVar[static_cast<std::size_t>(k)] >= 0) return;
+      kfVar[static_cast<std::size_t>(k)] = static_cast<int>(P.poses.size());
+      P.poses.push_back(keyframes_[static_cast<std::size_t>(k)].T);
+      P.poseFixed.push_back(fixed ? 1 : 0);
+      kfOf.push_back(k);
+    };
+    for (int k : window) addKf(k, false);
+    for (int k : window) {
+      for (int pid : keyframes_[static_cast<std::size_t>(k)].points) {
+        if (!points_[static_cast<std::size_t>(pid)].valid || ptVar[static_cast<std::size_t>(pid)] >= 0) continue;
+        ptVar[static_cast<std::size_t>(pid)] = static_cast<int>(P.points.size());
+        P.points.push_back(points_[static_cast<std::size_t>(pid)].X);
+        ptOf.push_back(pid);
+      }
+    }
+    if (P.points.empty()) return;
+    for (int pid : ptOf) {
+      for (const Obs& o : points_[static_cast<std::size_t>(pid)].obs) {
+        if (kfVar[static_cast<std::size_t>(o.kf)] < 0) addKf(o.kf, true);
+      }
+    }
+    // Gauge, per segment (DESIGN §5: monocular, 7 freedoms). Local: the keyframes outside the
+    // window that see its points are fixed; when fewer than two of a segment's are, its oldest
+    // free keyframe is fixed too, and with none at all its first baseline is held by a scale
+    // prior. Global: each segment's first keyframe fixed, a scale prior on its first baseline.
+    std::vector<int> segs;
+    for (int k : kfOf) {
+      const int seg = keyframes_[static_cast<std::size_t>(k)].segment;
+      if (std::find(segs.begin(), segs.end(), seg) == segs.end()) segs.push_back(seg);
+    }
+    for (int seg : segs) {
+      std::vector<int> freeV;  // problem indices of the segment's free keyframes, oldest first
+      int fixedInSeg = 0;
+      for (std::size_t v = 0; v < kfOf.size(); ++v) {
+        if (keyframes_[static_cast<std::size_t>(kfOf[v])].segment != seg) continue;
+        if (P.poseFixed[v]) {
+          ++fixedInSeg;
+        } else {
+          freeV.push_back(static_cast<int>(v));
+        }
+      }
+      std::sort(freeV.begin(), freeV.end(), [&](int a, int b) { return kfOf[static_cast<std::size_t>(a)] < kfOf[static_cast<std::size_t>(b)]; });
+      if (freeV.empty()) continue;
+      if (global || fixedInSeg == 0) {
+        P.poseFixed[static_cast<std::size_t>(freeV[0])] = 1;
+        if (freeV.size() >= 2) {
+          BAScalePrior<Scalar> sp;
+          sp.poseA = freeV[0];
+          sp.poseB = freeV[1];
+          sp.distance = (P.poses[static_cast<std::size_t>(sp.poseA)].translation() -
+                         P.poses[static_cast<std::size_t>(sp.poseB)].translation()).norm();
+          sp.weight = Scalar(1e4) / std::max(sp.distance * sp.distance, Scalar(1e-12));
+          if (sp.distance > Scalar(0)) P.scalePriors.push_back(sp);
+        }
+      } else if (fixedInSeg == 1) {
+        P.poseFixed[static_cast<std::size_t>(freeV[0])] = 1;
+      }
+    }
+    // Observations, masked residuals at weight 0 (back-end masking).
+    for (std::size_t j = 0; j < ptOf.size(); ++j) {
+      const MapPoint& p = points_[static_cast<std::size_t>(ptOf[j])];
+      for (const Obs& o : p.obs) {
+        BAObservation<Scalar> ob;
+        ob.pose = kfVar[static_cast<std::size_t>(o.kf)];
+        ob.point = static_cast<int>(j);
+        ob.uv = o.uv;
+        const Keyframe& kf = keyframes_[static_cast<std::size_t>(o.kf)];
+        if (opt_.useMasks && !kf.mask.bits.empty()) {
+          const V3 Xc = kf.T.inverse() * p.X;
+          const V2 q = Xc(2) > Scalar(0) ? cam_.project(Xc) : o.uv;
+          if (kf.mask.test(o.uv(0), o.uv(1)) || kf.mask.test(q(0), q(1))) ob.weight = Scalar(0);
+        }
+        P.observations.push_back(ob);
+      }
+    }
+    BAOptions<Scalar> bo;
+    bo.maxIterations = iterations;
+    bo.loss = RobustLoss::Huber;
+    bo.sigmaPx = Scalar(1);
+    bo.robustScale = Scalar(2);
+    bo.functionTolerance = Scalar(1e-5);
+    bundleAdjust(P, bo);
+    for (std::size_t v = 0; v < kfOf.size(); ++v) {
+      if (!P.poseFixed[v]) keyframes_[static_cast<std::size_t>(kfOf[v])].T = P.poses[v];
+    }
+    for (std::size_t j = 0; j < ptOf.size(); ++j) points_[static_cast<std::size_t>(ptOf[j])].X = P.points[j];
+    cullObservations(ptOf);
+  }
+
+  /// Drops observations whose reprojection error exceeds maxReprojPx (or that are behind the
+  /// camera); a point left with fewer than two observations is invalid, and its track unmapped.
+  void cullObservations(const std::vector<int>& pts) {
+    const Scalar maxErr2 = Scalar(4) * opt_.maxReprojPx * opt_.maxReprojPx;
+    for (int pid : pts) {
+      MapPoint& p = points_[static_cast<std::size_t>(pid)];
+      std::size_t w = 0;
+      for (std::size_t i = 0; i < p.obs.size(); ++i) {
+        const Keyframe& kf = keyframes_[static_cast<std::size_t>(p.obs[i].kf)];
+        const V3 Xc = kf.T.inverse() * p.X;
+        if (Xc(2) > Scalar(0) && (cam_.project(Xc) - p.obs[i].uv).squaredNorm() <= maxErr2) p.obs[w++] = p.obs[i];
+      }
+      p.obs.resize(w);
+      if (w < 2) p.valid = false;
+    }
+    std::vector<char> drop(tracks_.size(), 0);
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      const Track& t = tracks_[i];
+      if (t.point >= 0 && !points_[static_cast<std::size_t>(t.point)].valid) drop[i] = 1;
+    }
+    removeTracks(drop);
+  }
+
+  /// Removes the flagged tracks (keeping prevUv_ aligned with tracks_).
+  void removeTracks(const std::vector<char>& drop) {
+    std::size_t w = 0;
+    const bool withPrev = prevUv_.size() == tracks_.size();
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (drop[i]) continue;
+      if (withPrev) prevUv_[w] = prevUv_[i];
+      if (w != i) tracks_[w] = std::move(tracks_[i]);
+      ++w;
+    }
+    tracks_.resize(w);
+    if (withPrev) prevUv_.resize(w);
+  }
+
+  // ---------------------------------------------------------------- finish
+  void refineAllFrames() {
+    for (Frame& fr : frames_) {
+      std::vector<V3> X;
+      std::vector<V2> uv;
+      for (std::size_t i = 0; i < fr.obsTrack.size(); ++i) {
+        const int pid = trackPoint_[static_cast<std::size_t>(fr.obsTrack[i])];
+        if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+        X.push_back(points_[static_cast<std::size_t>(pid)].X);
+        uv.push_back(V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1))));
+      }
+      if (static_cast<int>(X.size()) < opt_.minInliers) continue;
+      PnPRansacOptions<Scalar> po = opt_.pnp;
+      po.minInliers = opt_.minInliers;
+      if (fr.posed) {
+        SE3T T = fr.T;
+        std::vector<Scalar> w(X.size(), Scalar(1));
+        const SE3T Tcw = T.inverse();
+        int used = 0;
+        for (std::size_t i = 0; i < X.size(); ++i) {
+          const V3 Xc = Tcw * X[i];
+          const bool in = Xc(2) > Scalar(0) && (cam_.project(Xc) - uv[i]).norm() < Scalar(3) * po.thresholdPx;
+          w[i] = in ? Scalar(1) : Scalar(0);
+          used += in ? 1 : 0;
+        }
+        if (used >= opt_.minInliers) {
+          PoseRefineOptions<Scalar> ro = po.refinement;
+          ro.maxIterations = 10;
+          refinePose(X, uv, &w, cam_, T, ro);
+          if (T.translation().allFinite()) fr.T = T;
+        }
+      } else {
+        const PnPRansacResult<Scalar> r = solvePnPRansac(X, uv, cam_, po);
+        if (r.ok()) {
+          fr.T = r.T_w_c;
+          fr.posed = true;
+          fr.inliers = r.numInliers;
+          if (fr.status == SlamStatus::Interpolated) fr.status = SlamStatus::Tracked;
+        }
+      }
+    }
+  }
+
+  /// Frames without a map pose: translation (and rotation where the rays gave none) interpolated
+  /// between the nearest posed frames; held at the ends.
+  void fillUnposed() {
+    const int n = static_cast<int>(frames_.size());
+    int prev = -1;
+    for (int i = 0; i < n; ++i) {
+      if (frames_[static_cast<std::size_t>(i)].posed) {
+        prev = i;
+        continue;
+      }
+      int next = i + 1;
+      while (next < n && !frames_[static_cast<std::size_t>(next)].posed) ++next;
+      Frame& fr = frames_[static_cast<std::size_t>(i)];
+      if (prev < 0 && next >= n) continue;  // nothing posed at all: rotation-only output
+      if (prev < 0) {
+        fr.T = SE3T(fr.rotationKnown ? fr.T.rotation() : frames_[static_cast<std::size_t>(next)].T.rotation(),
+                    frames_[static_cast<std::size_t>(next)].T.translation());
+      } else if (next >= n) {
+        fr.T = SE3T(fr.rotationKnown ? fr.T.rotation() : frames_[static_cast<std::size_t>(prev)].T.rotation(),
+                    frames_[static_cast<std::size_t>(prev)].T.translation());
+      } else {
+        const Scalar a = Scalar(i - prev) / Scalar(next - prev);
+        const SE3T& A = frames_[static_cast<std::size_t>(prev)].T;
+        const SE3T& B = frames_[static_cast<std::size_t>(next)].T;
+        fr.T = SE3T(fr.rotationKnown && fr.status != SlamStatus::Lost ? fr.T.rotation() : interpolate(A.rotation(), B.rotation(), a),
+                    V3((Scalar(1) - a) * A.translation() + a * B.translation()));
+      }
+    }
+  }
+
+  PinholeCamera<Scalar> cam_;
+  SlamOptions<Scalar> opt_;
+  int width_ = 0, height_ = 0;
+  bool finished_ = false;
+  State state_ = State::Initialising;
+  ImagePyramid prevPyr_, curPyr_;
+  ImageU8 curMask_;
+  std::vector<unsigned char> maskTmp_;
+  bool hasMask_ = false;
+  CoarseMask refMask_;
+  std::vector<Track> tracks_;
+  std::vector<MapPoint> points_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<Frame> frames_;
+  std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
+  int refFrame_ = 0, refTracks_ = 0, lastInitAttempt_ = -1000;
+  int segment_ = 0;
+  int lost_ = 0, losses_ = 0, resets_ = 0, recovered_ = 0;
+  bool afterLoss_ = false, everInitialised_ = false;
+  int lastKfInliers_ = 0, framesSinceKf_ = 0;
+  Scalar lastMedianDepth_ = Scalar(0);
+  SE3T predicted_;
+  bool havePrediction_ = false;
+  // Scratch.
+  std::vector<Vec2f> from_, to_, prevUv_, existing_, fresh_;
+  std::vector<char> ok_;
+  CornerScratch cornerScratch_;
+};
+
+}  // namespace hawor

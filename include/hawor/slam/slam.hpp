@@ -1,0 +1,19 @@
+// hawor/slam/slam.hpp — the SLAM module (issue 4, DESIGN §5): front end (pyramid, hand masks,
+// Shi–Tomasi corners with bucketing, pyramidal KLT), minimal solvers and robust estimation
+// (RANSAC, 5-point essential, homography, P3P, PnP-RANSAC, triangulation, two-view
+// initialisation), sparse bundle adjustment, and the monocular SLAM system with dual hand masking.
+#pragma once
+
+#include "image_pyramid.hpp"
+#include "hand_mask.hpp"
+#include "corners.hpp"
+#include "klt.hpp"
+#include "ransac.hpp"
+#include "essential.hpp"
+#include "homography.hpp"
+#include "p3p.hpp"
+#include "triangulation.hpp"
+#include "two_view.hpp"
+#include "pnp_ransac.hpp"
+#include "bundle_adjustment.hpp"
+#include "mono_slam.hpp"

@@ -1,0 +1,181 @@
+// MonoSlam end to end on short sequences of the synthetic generator (native and WASM): accuracy
+// against the ground-truth trajectory (Sim(3)-aligned), the keyframe depths against the rendered
+// depth maps, the hand masking, and bad input.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "hawor/eval/camera_metrics.hpp"
+#include "hawor/hand/mirror.hpp"
+#include "hawor/hand/synthetic_hand.hpp"
+#include "hawor/slam/mono_slam.hpp"
+#include "hawor/synth/synth.hpp"
+
+template class hawor::MonoSlam<float>;
+template class hawor::MonoSlam<double>;
+
+namespace {
+
+namespace hs = hawor::synth;
+
+struct Run {
+  hawor::SlamResult<double> result;
+  std::vector<hawor::Vec3<double>> gt;
+  std::vector<hs::SynthFrame<double>> keep;  // frames kept for the checks (keyframes only)
+  double path = 0;
+};
+
+const hawor::HandModel<double>& rightHand() {
+  static const hawor::HandModel<double> r = hawor::makeSyntheticHand<double>();
+  return r;
+}
+const hawor::HandModel<double>& leftHand() {
+  static const hawor::HandModel<double> l = hawor::mirrorHandModel(rightHand());
+  return l;
+}
+
+Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t seed) {
+  hs::SynthOptions so;
+  so.width = 640;
+  so.height = 480;
+  so.frames = frames;
+  so.textureDivisor = 2;
+  hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
+  hawor::SlamOptions<double> opt;
+  opt.useMasks = masks;
+  hawor::MonoSlam<double> slam(seq.camera(), opt);
+  Run run;
+  std::vector<hs::SynthFrame<double>> all;
+  hs::SynthFrame<double> fr;
+  for (int i = 0; i < seq.numFrames(); ++i) {
+    seq.renderFrame(i, fr);
+    run.gt.push_back(fr.worldFromCamera.t);
+    slam.process(fr.images.rgb, &fr.images.mask);
+    all.push_back(fr);
+    all.back().images.rgb = hawor::ImageU8();  // keep depth and mask only
+  }
+  run.result = slam.finish();
+  for (std::size_t i = 1; i < run.gt.size(); ++i) run.path += (run.gt[i] - run.gt[i - 1]).norm();
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (run.result.keyframe[i]) run.keep.push_back(std::move(all[i]));
+  }
+  return run;
+}
+
+double ateMetres(const Run& r, double* scale = nullptr) {
+  std::vector<hawor::Vec3<double>> est;
+  for (const auto& T : r.result.poses) est.push_back(T.translation());
+  return hawor::ateSim3(hawor::cameraPositions(r.gt), hawor::cameraPositions(est), scale) / 1000.0;
+}
+
+}  // namespace
+
+TEST_CASE("MonoSlam: walking sequence with hands, accurate up to a similarity", "[slam][system]") {
+  const Run r = runPreset("walk", 60, true, 3);
+  const int n = static_cast<int>(r.result.poses.size());
+  REQUIRE(n == 60);
+  CHECK(r.result.initialised);
+  CHECK(r.result.numKeyframes >= 3);
+  CHECK(r.result.poses[0].translation().norm() < 1e-9);
+  CHECK(r.result.count(hawor::SlamStatus::Tracked) >= n * 3 / 4);
+  CHECK(r.result.count(hawor::SlamStatus::Lost) == 0);
+  double scale = 0;
+  const double ate = ateMetres(r, &scale);
+  INFO("ATE " << ate << " m over a path of " << r.path << " m");
+  CHECK(ate < 0.02 * r.path);
+
+  // Keyframe depths: the SLAM's depths times the Sim(3) scale match the rendered depth maps, and
+  // none lies on a hand (back-end masking keeps masked points out of the scale step).
+  std::size_t k = 0, checked = 0, onHand = 0;
+  std::vector<double> rel;
+  for (const auto& kd : r.result.keyframeDepths) {
+    while (k < r.keep.size() && r.keep[k].index != kd.frame) ++k;
+    REQUIRE(k < r.keep.size());
+    const hs::SynthFrame<double>& f = r.keep[k];
+    for (std::size_t q = 0; q < kd.depth.size(); ++q) {
+      const int x = int(std::lround(kd.uv[q](0))), y = int(std::lround(kd.uv[q](1)));
+      REQUIRE(f.images.depth.contains(x, y));
+      if (f.images.mask.at(x, y)) ++onHand;
+      const double g = f.images.depth.at(x, y);
+      if (std::isfinite(g)) rel.push_back(scale * kd.depth[q] / g);
+      ++checked;
+    }
+  }
+  REQUIRE(checked > 100);
+  CHECK(onHand == 0);
+  std::sort(rel.begin(), rel.end());
+  const double med = rel[rel.size() / 2];
+  CHECK(med == Approx(1.0).margin(0.05));
+  // Most points lie on the surface they were seen on (depth discontinuities excepted).
+  std::size_t close = 0;
+  for (double v : rel) close += std::abs(v - 1.0) < 0.05 ? 1 : 0;
+  CHECK(close > rel.size() * 8 / 10);
+}
+
+TEST_CASE("MonoSlam: bad input gives errors or statuses, never a crash", "[slam][system]") {
+  hawor::PinholeCamera<double> cam;
+  cam.fx = cam.fy = 200, cam.cx = 159.5, cam.cy = 119.5;
+  SECTION("empty, mismatched sizes, wrong mask, calls out of order") {
+    hawor::MonoSlam<double> slam(cam);
+    CHECK_THROWS_AS(slam.process(hawor::ImageU8()), hawor::Error);
+    slam.process(hawor::ImageU8(320, 240, 3, 40));
+    CHECK_THROWS_WITH(slam.process(hawor::ImageU8(321, 240, 3, 40)), Catch::Contains("321x240"));
+    const hawor::ImageU8 badMask(100, 100, 1, 0);
+    CHECK_THROWS_WITH(slam.process(hawor::ImageU8(320, 240, 3, 40), &badMask), Catch::Contains("mask"));
+    slam.finish();
+    CHECK_THROWS_AS(slam.process(hawor::ImageU8(320, 240, 3, 40)), hawor::Error);
+    CHECK_THROWS_AS(slam.finish(), hawor::Error);
+  }
+  SECTION("invalid intrinsics") {
+    hawor::PinholeCamera<double> bad = cam;
+    bad.fx = 0;
+    CHECK_THROWS_AS(hawor::MonoSlam<double>(bad), hawor::Error);
+    bad = cam;
+    bad.cx = std::nan("");
+    CHECK_THROWS_AS(hawor::MonoSlam<double>(bad), hawor::Error);
+  }
+  SECTION("all-black frames and a mask over everything: statuses, identity poses") {
+    for (int variant = 0; variant < 2; ++variant) {
+      hawor::MonoSlam<double> slam(cam);
+      const hawor::ImageU8 black(320, 240, 1, 0), full(320, 240, 1, 255);
+      hs::SynthOptions so;
+      so.width = 320, so.height = 240, so.frames = 12, so.textureDivisor = 4;
+      hs::SynthSequence<double> seq(hs::findSynthPreset("walk"), 1, leftHand(), rightHand(), so);
+      hs::SynthFrame<double> fr;
+      for (int i = 0; i < 12; ++i) {
+        if (variant == 0) {
+          CHECK(slam.process(black) == hawor::SlamStatus::Interpolated);
+        } else {
+          seq.renderFrame(i, fr);
+          CHECK(slam.process(fr.images.rgb, &full) == hawor::SlamStatus::Interpolated);
+          CHECK(slam.numLiveTracks() == 0);
+        }
+      }
+      const hawor::SlamResult<double> r = slam.finish();
+      REQUIRE(r.poses.size() == 12);
+      CHECK_FALSE(r.initialised);
+      for (const auto& T : r.poses) {
+        CHECK(T.translation().norm() == 0.0);
+        CHECK(T.rotationMatrix().isApprox(Eigen::Matrix3d::Identity(), 1e-9));
+      }
+    }
+  }
+}
+
+TEST_CASE("MonoSlam<float> runs the same pipeline", "[slam][system]") {
+  hs::SynthOptions so;
+  so.width = 320, so.height = 240, so.frames = 30, so.textureDivisor = 4;
+  hs::SynthSequence<double> seq(hs::findSynthPreset("walk"), 2, leftHand(), rightHand(), so);
+  hawor::PinholeCamera<float> cam = seq.camera().cast<float>();
+  hawor::MonoSlam<float> slam(cam);
+  hs::SynthFrame<double> fr;
+  for (int i = 0; i < seq.numFrames(); ++i) {
+    seq.renderFrame(i, fr);
+    slam.process(fr.images.rgb, &fr.images.mask);
+  }
+  const hawor::SlamResult<float> r = slam.finish();
+  REQUIRE(r.poses.size() == 30);
+  for (const auto& T : r.poses) CHECK(T.translation().allFinite());
+}
