@@ -13,7 +13,7 @@ namespace {
 using hawor::JointSequence;
 
 template <typename S>
-S tol() {
+S handTol() {
   return std::is_same<S, float>::value ? S(5e-3) : S(1e-8);  // in mm / % / m/s²
 }
 
@@ -39,7 +39,7 @@ JointSequence<S> handTrack(Eigen::Index T, Eigen::Index J, unsigned seed) {
 }
 
 template <typename S>
-hawor::SimilarityTransform<S> someSim(S scale, unsigned seed) {
+hawor::SimilarityTransform<S> handSim(S scale, unsigned seed) {
   std::srand(seed);
   hawor::SimilarityTransform<S> x;
   x.R = hawor::axisAngleToMatrix(hawor::Vec3<S>(hawor::Vec3<S>::Random() * S(2)));
@@ -86,22 +86,22 @@ TEMPLATE_TEST_CASE("a similarity of the ground truth scores zero", "[eval][hands
   using S = TestType;
   const JointSequence<S> gt = handTrack<S>(250, 21, 1);
   JointSequence<S> est = gt;
-  applyTo(est, someSim<S>(S(1.3), 2), 0, 250);
-  CHECK(hawor::paMpjpe(gt, est) < tol<S>());
+  applyTo(est, handSim<S>(S(1.3), 2), 0, 250);
+  CHECK(hawor::paMpjpe(gt, est) < handTol<S>());
   // rounding-level errors are > 0 = the first threshold, so PCK(0) = 0 and the first trapezoid
   // is half: AUC = 1 − 0.5/99 (the convention; an exactly zero error would give 1)
   CHECK(hawor::aucPck(gt, est) == Approx(1.0 - 0.5 / 99.0).margin(1e-4));
-  CHECK(hawor::wMpjpe(gt, est) < tol<S>());
-  CHECK(hawor::waMpjpe(gt, est) < tol<S>());
+  CHECK(hawor::wMpjpe(gt, est) < handTol<S>());
+  CHECK(hawor::waMpjpe(gt, est) < handTol<S>());
   // rigid (no scale): RTE 0 too; with a scale RTE is not 0
   JointSequence<S> rigid = gt;
-  applyTo(rigid, someSim<S>(S(1), 3), 0, 250);
-  CHECK(hawor::rte(gt, rigid) < tol<S>());
+  applyTo(rigid, handSim<S>(S(1), 3), 0, 250);
+  CHECK(hawor::rte(gt, rigid) < handTol<S>());
   CHECK(hawor::rte(gt, est) > S(1));
   // a constant offset has no acceleration error
   JointSequence<S> shifted = gt;
   shifted.rowwise() += Eigen::Matrix<S, 1, Eigen::Dynamic>::Constant(63, S(0.7));
-  CHECK(hawor::accelError(gt, shifted) < tol<S>());
+  CHECK(hawor::accelError(gt, shifted) < handTol<S>());
   CHECK(hawor::accelError(gt, est) > S(0.01));
 }
 
@@ -111,14 +111,14 @@ TEMPLATE_TEST_CASE("W/WA-MPJPE fit one similarity per 100-frame chunk", "[eval][
   const JointSequence<S> gt = handTrack<S>(250, 21, 4);
   // a different similarity on each official chunk [0,100) [100,200) [200,250): still zero
   JointSequence<S> est = gt;
-  applyTo(est, someSim<S>(S(0.8), 5), 0, 100);
-  applyTo(est, someSim<S>(S(1.2), 6), 100, 200);
-  applyTo(est, someSim<S>(S(1.5), 7), 200, 250);
-  CHECK(hawor::wMpjpe(gt, est) < tol<S>());
-  CHECK(hawor::waMpjpe(gt, est) < tol<S>());
+  applyTo(est, handSim<S>(S(0.8), 5), 0, 100);
+  applyTo(est, handSim<S>(S(1.2), 6), 100, 200);
+  applyTo(est, handSim<S>(S(1.5), 7), 200, 250);
+  CHECK(hawor::wMpjpe(gt, est) < handTol<S>());
+  CHECK(hawor::waMpjpe(gt, est) < handTol<S>());
   // a change inside a chunk is not absorbed
   JointSequence<S> bad = gt;
-  applyTo(bad, someSim<S>(S(1.1), 8), 150, 250);
+  applyTo(bad, handSim<S>(S(1.1), 8), 150, 250);
   CHECK(hawor::waMpjpe(gt, bad) > S(1));
   // W fits on the first two frames only: a change after them counts fully in W, less in WA
   JointSequence<S> late = gt;
@@ -165,7 +165,7 @@ TEMPLATE_TEST_CASE("hand-computed values", "[eval][hands]", float, double) {
   JointSequence<S> ep = gp + JointSequence<S>::Random(6, 63) * S(0.003);
   const S pa = hawor::paMpjpe(gp, ep);
   CHECK(pa > S(0.1));
-  for (Eigen::Index t = 0; t < 6; ++t) applyTo(ep, someSim<S>(S(0.5 + 0.2 * t), 20 + t), t, t + 1);
+  for (Eigen::Index t = 0; t < 6; ++t) applyTo(ep, handSim<S>(S(0.5 + 0.2 * t), 20 + t), t, t + 1);
   CHECK(hawor::paMpjpe(gp, ep) == Approx(pa).epsilon(std::is_same<S, float>::value ? 1e-3 : 1e-10));
 }
 

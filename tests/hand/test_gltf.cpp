@@ -13,7 +13,7 @@
 
 namespace {
 
-std::string errorOf(const std::function<void()>& f) {
+std::string gltfErrorOf(const std::function<void()>& f) {
   try {
     f();
   } catch (const hawor::Error& e) {
@@ -22,17 +22,17 @@ std::string errorOf(const std::function<void()>& f) {
   return "<no error>";
 }
 
-hawor::Gltf parse(const std::vector<uint8_t>& b) { return hawor::Gltf::fromGlb(b, "t.glb"); }
+hawor::Gltf parseGlb(const std::vector<uint8_t>& b) { return hawor::Gltf::fromGlb(b, "t.glb"); }
 
 std::string glbError(const std::string& json, const std::vector<uint8_t>& bin) {
-  return errorOf([&] { parse(gltf_test::makeGlb(json, bin)); });
+  return gltfErrorOf([&] { parseGlb(gltf_test::makeGlb(json, bin)); });
 }
 
 /// Error of parsing the finger with one JSON edit, and of reading every accessor.
 std::string editError(const std::string& from, const std::string& to, const gltf_test::Spec& spec = {}) {
   const gltf_test::Finger f = gltf_test::makeFinger(spec);
-  return errorOf([&] {
-    const hawor::Gltf g = parse(gltf_test::makeGlb(gltf_test::replaced(f.json, from, to), f.bin));
+  return gltfErrorOf([&] {
+    const hawor::Gltf g = parseGlb(gltf_test::makeGlb(gltf_test::replaced(f.json, from, to), f.bin));
     for (size_t i = 0; i < g.accessors().size(); ++i) g.readFloats(static_cast<int>(i));
   });
 }
@@ -73,16 +73,16 @@ TEST_CASE("json: malformed documents are errors", "[gltf][json]") {
                        "\xEF\xBB\xBF{}", "{\"a\":[1,2}"};
   for (const char* s : bad) {
     INFO("input: " << s);
-    const std::string e = errorOf([&] { hawor::parseJson(s, "doc"); });
+    const std::string e = gltfErrorOf([&] { hawor::parseJson(s, "doc"); });
     CHECK(e.find("hawor: doc") == 0);
   }
-  CHECK(errorOf([] { hawor::parseJson("{\"a\":1,\"a\":2}"); }).find("duplicate key \"a\"") != std::string::npos);
-  CHECK(errorOf([] { hawor::parseJson("[1 2]"); }).find("at byte 3") != std::string::npos);
+  CHECK(gltfErrorOf([] { hawor::parseJson("{\"a\":1,\"a\":2}"); }).find("duplicate key \"a\"") != std::string::npos);
+  CHECK(gltfErrorOf([] { hawor::parseJson("[1 2]"); }).find("at byte 3") != std::string::npos);
 }
 
 TEST_CASE("json: depth, size and value-count limits", "[gltf][json]") {
   const std::string deep(100000, '[');
-  CHECK(errorOf([&] { hawor::parseJson(deep); }).find("nesting deeper than 64") != std::string::npos);
+  CHECK(gltfErrorOf([&] { hawor::parseJson(deep); }).find("nesting deeper than 64") != std::string::npos);
   std::string ok = std::string(64, '[') + std::string(64, ']');
   CHECK_NOTHROW(hawor::parseJson(ok));
   std::string tooDeep = std::string(65, '[') + std::string(65, ']');
@@ -93,7 +93,7 @@ TEST_CASE("json: depth, size and value-count limits", "[gltf][json]") {
   CHECK_THROWS_AS(hawor::parseJson(objDeep), hawor::Error);
   hawor::JsonLimits lim;
   lim.maxValues = 10;
-  CHECK(errorOf([&] { hawor::parseJson("[1,2,3,4,5,6,7,8,9,10]", "doc", lim); }).find("more than 10 values") != std::string::npos);
+  CHECK(gltfErrorOf([&] { hawor::parseJson("[1,2,3,4,5,6,7,8,9,10]", "doc", lim); }).find("more than 10 values") != std::string::npos);
   CHECK_NOTHROW(hawor::parseJson("[1,2,3,4,5,6,7,8,9]", "doc", lim));
   lim.maxBytes = 4;
   CHECK_THROWS_AS(hawor::parseJson("[1,2]", "doc", lim), hawor::Error);
@@ -101,7 +101,7 @@ TEST_CASE("json: depth, size and value-count limits", "[gltf][json]") {
 
 TEST_CASE("json: typed access names the value", "[gltf][json]") {
   const hawor::JsonValue v = hawor::parseJson("{\"a\":\"s\"}");
-  CHECK(errorOf([&] { v.find("a")->asNumber("f.glb: nodes[0].a"); }) ==
+  CHECK(gltfErrorOf([&] { v.find("a")->asNumber("f.glb: nodes[0].a"); }) ==
         "hawor: f.glb: nodes[0].a must be a number, found a string");
   CHECK_THROWS_AS(v.items("x"), hawor::Error);
 }
@@ -121,7 +121,7 @@ TEST_CASE("gltf: the finger reads back exactly in every encoding", "[gltf]") {
           spec.armatureMatrix = matrix;
           INFO("weights " << weights << " indices " << indices << " interleaved " << interleaved << " matrix " << matrix);
           const gltf_test::Finger f = gltf_test::makeFinger(spec);
-          const hawor::Gltf g = parse(f.glb());
+          const hawor::Gltf g = parseGlb(f.glb());
           REQUIRE(g.nodes().size() == 5);
           REQUIRE(g.meshes().size() == 1);
           REQUIRE(g.skins().size() == 1);
@@ -178,7 +178,7 @@ TEST_CASE("gltf: matrices with padded columns, signed normalized, bufferView-les
       "{\"bufferView\":1,\"componentType\":5120,\"normalized\":true,\"count\":2,\"type\":\"VEC2\"},"
       "{\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
       "{\"bufferView\":1,\"componentType\":5122,\"count\":1,\"type\":\"VEC2\"}]}";
-  const hawor::Gltf g = parse(gltf_test::makeGlb(json, bin));
+  const hawor::Gltf g = parseGlb(gltf_test::makeGlb(json, bin));
   CHECK(g.readFloats(0) == std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8});
   const std::vector<double> sn = g.readFloats(1);
   CHECK(sn[0] == -1.0);
@@ -187,7 +187,7 @@ TEST_CASE("gltf: matrices with padded columns, signed normalized, bufferView-les
   CHECK(sn[3] == 0.0);
   CHECK(g.readFloats(2) == std::vector<double>(9, 0.0));
   CHECK(g.readFloats(3) == std::vector<double>{static_cast<double>(int16_t(0x7F80)), 0x81});
-  CHECK(errorOf([&] { g.readUints(1); }).find("expected an unsigned integer type") != std::string::npos);
+  CHECK(gltfErrorOf([&] { g.readUints(1); }).find("expected an unsigned integer type") != std::string::npos);
   CHECK_THROWS_AS(g.readFloats(7), hawor::Error);
   CHECK_THROWS_AS(g.nodeWorld(0), hawor::Error);
 }
@@ -201,7 +201,7 @@ TEST_CASE("gltf: unknown chunks are skipped, trailing padding and NULs in the JS
   const uint32_t total = static_cast<uint32_t>(b.size());
   for (int i = 0; i < 4; ++i) b[static_cast<size_t>(8 + i)] = static_cast<uint8_t>(total >> (8 * i));
   (void)extra;
-  CHECK_NOTHROW(parse(b));
+  CHECK_NOTHROW(parseGlb(b));
   // JSON chunk padded with NULs instead of spaces.
   std::string json = f.json;
   std::vector<uint8_t> j(json.begin(), json.end());
@@ -220,7 +220,7 @@ TEST_CASE("gltf: unknown chunks are skipped, trailing padding and NULs in the JS
   gltf_test::put32(out, static_cast<uint32_t>(f.bin.size()));
   gltf_test::put32(out, 0x004E4942u);
   out.insert(out.end(), f.bin.begin(), f.bin.end());
-  CHECK_NOTHROW(parse(out));
+  CHECK_NOTHROW(parseGlb(out));
 }
 
 // --- GLB reader: malformed files --------------------------------------------------------------------
@@ -228,37 +228,37 @@ TEST_CASE("gltf: unknown chunks are skipped, trailing padding and NULs in the JS
 TEST_CASE("gltf: container errors", "[gltf][malformed]") {
   const gltf_test::Finger f = gltf_test::makeFinger();
   const std::vector<uint8_t> good = f.glb();
-  CHECK(errorOf([] { parse({}); }).find("too short for a GLB header") != std::string::npos);
+  CHECK(gltfErrorOf([] { parseGlb({}); }).find("too short for a GLB header") != std::string::npos);
   std::vector<uint8_t> b = good;
   b[0] = 'x';
-  CHECK(errorOf([&] { parse(b); }).find("not a binary glTF file") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("not a binary glTF file") != std::string::npos);
   const std::string text = "{\"asset\":{\"version\":\"2.0\"}}";
-  CHECK(errorOf([&] { parse(std::vector<uint8_t>(text.begin(), text.end())); }).find("looks like a .gltf JSON file") !=
+  CHECK(gltfErrorOf([&] { parseGlb(std::vector<uint8_t>(text.begin(), text.end())); }).find("looks like a .gltf JSON file") !=
         std::string::npos);
   b = good;
   b[4] = 1;
-  CHECK(errorOf([&] { parse(b); }).find("version 1 is not supported") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("version 1 is not supported") != std::string::npos);
   b = good;
   b[8] += 4;  // declared length beyond the data
-  CHECK(errorOf([&] { parse(b); }).find("truncated") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("truncated") != std::string::npos);
   b = good;
   b[12] = 0xFF;  // JSON chunk length lies
   b[13] = 0xFF;
-  CHECK(errorOf([&] { parse(b); }).find("declares") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("declares") != std::string::npos);
   b = good;
   b[16] = 'B';  // first chunk not JSON
-  CHECK(errorOf([&] { parse(b); }).find("first chunk is not the JSON chunk") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("first chunk is not the JSON chunk") != std::string::npos);
   // BIN chunk length lies (too long).
   b = good;
   const size_t jl = static_cast<size_t>(b[12]) | static_cast<size_t>(b[13]) << 8;
   const size_t binHeader = 20 + jl;
   b[binHeader + 2] = 0x10;
-  CHECK(errorOf([&] { parse(b); }).find("remain") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(b); }).find("remain") != std::string::npos);
   // No BIN chunk although buffer 0 needs it.
-  CHECK(errorOf([&] { parse(gltf_test::makeGlb(f.json, f.bin, false)); }).find("the file has none") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(gltf_test::makeGlb(f.json, f.bin, false)); }).find("the file has none") != std::string::npos);
   // BIN chunk shorter than buffer 0.
   std::vector<uint8_t> shortBin(f.bin.begin(), f.bin.end() - 8);
-  CHECK(errorOf([&] { parse(gltf_test::makeGlb(f.json, shortBin)); }).find("exceeds the") != std::string::npos);
+  CHECK(gltfErrorOf([&] { parseGlb(gltf_test::makeGlb(f.json, shortBin)); }).find("exceeds the") != std::string::npos);
   // JSON garbage and a JSON array at top level.
   CHECK(glbError("{\"asset\":", f.bin).find("JSON chunk") != std::string::npos);
   CHECK(glbError("[1,2,3]", f.bin).find("expected an object") != std::string::npos);
@@ -270,7 +270,7 @@ TEST_CASE("gltf: container errors", "[gltf][malformed]") {
   // A JSON chunk over the configured limit.
   hawor::GltfLimits lim;
   lim.json.maxBytes = 100;
-  CHECK(errorOf([&] { hawor::Gltf::fromGlb(good, "t.glb", lim); }).find("over the limit") != std::string::npos);
+  CHECK(gltfErrorOf([&] { hawor::Gltf::fromGlb(good, "t.glb", lim); }).find("over the limit") != std::string::npos);
 }
 
 TEST_CASE("gltf: document errors name the object", "[gltf][malformed]") {
@@ -338,10 +338,10 @@ TEST_CASE("gltf: document errors name the object", "[gltf][malformed]") {
 
 TEST_CASE("gltf: every truncation of a valid file is an error", "[gltf][malformed]") {
   const std::vector<uint8_t> good = gltf_test::makeFinger().glb();
-  REQUIRE_NOTHROW(parse(good));
+  REQUIRE_NOTHROW(parseGlb(good));
   for (size_t n = 0; n < good.size(); ++n) {
     const std::vector<uint8_t> prefix(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(n));
-    const std::string e = errorOf([&] { parse(prefix); });
+    const std::string e = gltfErrorOf([&] { parseGlb(prefix); });
     INFO("prefix " << n << ": " << e);
     CHECK(e.find("hawor: t.glb: ") == 0);
   }
@@ -360,7 +360,7 @@ TEST_CASE("gltf: random byte corruption never escapes as anything but hawor::Err
     const int flips = 1 + static_cast<int>(next() % 4);
     for (int k = 0; k < flips; ++k) b[next() % b.size()] = static_cast<uint8_t>(next());
     try {
-      const hawor::Gltf g = parse(b);
+      const hawor::Gltf g = parseGlb(b);
       for (size_t i = 0; i < g.accessors().size(); ++i) {
         g.readFloats(static_cast<int>(i));
         try {

@@ -12,7 +12,7 @@
 
 namespace {
 
-std::string errorOf(const std::function<void()>& f) {
+std::string gltfHandErrorOf(const std::function<void()>& f) {
   try {
     f();
   } catch (const hawor::Error& e) {
@@ -26,7 +26,7 @@ std::string errorOf(const std::function<void()>& f) {
 TEST_CASE("default hand: unusable skins are errors", "[hand][gltf][malformed]") {
   const gltf_test::Finger f = gltf_test::makeFinger();
   auto convert = [&](const std::string& from, const std::string& to, const std::vector<uint8_t>* bin = nullptr) {
-    return errorOf([&] {
+    return gltfHandErrorOf([&] {
       hawor::handFromGltf<double>(
           hawor::Gltf::fromGlb(gltf_test::makeGlb(gltf_test::replaced(f.json, from, to), bin ? *bin : f.bin), "f.glb"), false);
     });
@@ -60,11 +60,11 @@ TEST_CASE("default hand: unusable skins are errors", "[hand][gltf][malformed]") 
   // Limits.
   hawor::DefaultHandLimits lim;
   lim.maxJoints = 2;
-  CHECK(errorOf([&] { hawor::handFromGltf<double>(hawor::Gltf::fromGlb(f.glb(), "f.glb"), false, lim); }).find("over the limit") !=
+  CHECK(gltfHandErrorOf([&] { hawor::handFromGltf<double>(hawor::Gltf::fromGlb(f.glb(), "f.glb"), false, lim); }).find("over the limit") !=
         std::string::npos);
   lim = {};
   lim.maxVertices = 10;
-  CHECK(errorOf([&] { hawor::handFromGltf<double>(hawor::Gltf::fromGlb(f.glb(), "f.glb"), false, lim); }).find("too large") !=
+  CHECK(gltfHandErrorOf([&] { hawor::handFromGltf<double>(hawor::Gltf::fromGlb(f.glb(), "f.glb"), false, lim); }).find("too large") !=
         std::string::npos);
 }
 

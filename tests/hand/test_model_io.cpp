@@ -20,7 +20,7 @@ template hawor::HandModel<double> hawor::handModelFromNpz<double>(const hawor::N
 
 namespace {
 
-std::string errorOf(const std::function<void()>& f) {
+std::string modelIoErrorOf(const std::function<void()>& f) {
   try {
     f();
   } catch (const hawor::Error& e) {
@@ -108,8 +108,8 @@ TEST_CASE("model io: files, joint names and the converted glTF hand", "[hand][mo
   hawor::loadHandModel<double>(b.data(), b.size(), "b", &got);
   CHECK(got == odd);
   odd[1] = "a\nb";
-  CHECK(errorOf([&] { hawor::handModelToBuffer(h.model, odd); }).find("newline") != std::string::npos);
-  CHECK(errorOf([&] { hawor::handModelToBuffer(h.model, std::vector<std::string>(3, "x")); }).find("3 joint names for 25") !=
+  CHECK(modelIoErrorOf([&] { hawor::handModelToBuffer(h.model, odd); }).find("newline") != std::string::npos);
+  CHECK(modelIoErrorOf([&] { hawor::handModelToBuffer(h.model, std::vector<std::string>(3, "x")); }).find("3 joint names for 25") !=
         std::string::npos);
   CHECK_THROWS_AS(hawor::loadHandModel<double>(tmp("missing.npz")), hawor::Error);
 }
@@ -117,7 +117,7 @@ TEST_CASE("model io: files, joint names and the converted glTF hand", "[hand][mo
 TEST_CASE("model io: missing and inconsistent arrays name the key", "[hand][model_io][malformed]") {
   const hawor::HandModel<double> m = hand_test::randomModel<double>(60, {-1, 0, 1, 0, 3}, 2, true, 3);
   const hawor::Npz good = hawor::handModelToNpz(m, {"a", "b", "c", "d", "e"});
-  auto loadErr = [](const hawor::Npz& z) { return errorOf([&] { hawor::handModelFromNpz<double>(z); }); };
+  auto loadErr = [](const hawor::Npz& z) { return modelIoErrorOf([&] { hawor::handModelFromNpz<double>(z); }); };
   CHECK(loadErr(good) == "<no error>");
   for (const std::string& key : good.names()) {
     INFO(key);

@@ -9,7 +9,7 @@
 namespace {
 
 template <typename S>
-S tol() {
+S seqTol() {
   return std::is_same<S, float>::value ? S(1e-5) : S(1e-13);
 }
 
@@ -74,14 +74,14 @@ TEMPLATE_TEST_CASE("fillLinear: valid frames untouched, interior linear, ends he
     if (valid[size_t(t)]) CHECK(rowBitwiseEqual(out, seq, t));
   for (Eigen::Index t : {0, 1, 2}) CHECK(out.row(t) == seq.row(3));
   for (Eigen::Index t : {10, 11}) CHECK(out.row(t) == seq.row(9));
-  CHECK((out.row(5) - S(0.5) * (seq.row(4) + seq.row(6))).norm() < tol<S>());
-  CHECK((out.row(7) - (seq.row(6) + (seq.row(9) - seq.row(6)) / S(3))).norm() < tol<S>());
-  CHECK((out.row(8) - (seq.row(6) + S(2) * (seq.row(9) - seq.row(6)) / S(3))).norm() < tol<S>());
+  CHECK((out.row(5) - S(0.5) * (seq.row(4) + seq.row(6))).norm() < seqTol<S>());
+  CHECK((out.row(7) - (seq.row(6) + (seq.row(9) - seq.row(6)) / S(3))).norm() < seqTol<S>());
+  CHECK((out.row(8) - (seq.row(6) + S(2) * (seq.row(9) - seq.row(6)) / S(3))).norm() < seqTol<S>());
   // a linear signal is reproduced exactly in the interior
   hawor::Sequence<S> ramp(12, 1);
   for (Eigen::Index t = 0; t < 12; ++t) ramp(t, 0) = S(2) * S(t) - S(3);
   const hawor::Sequence<S> r = hawor::fillLinear(withNaNGaps<S>(ramp, valid), valid);
-  for (Eigen::Index t = 3; t <= 9; ++t) CHECK(std::abs(r(t, 0) - ramp(t, 0)) < tol<S>() * 20);
+  for (Eigen::Index t = 3; t <= 9; ++t) CHECK(std::abs(r(t, 0) - ramp(t, 0)) < seqTol<S>() * 20);
 }
 
 TEMPLATE_TEST_CASE("fillRotations: SLERP per triple in gaps, constant speed, ends held",
@@ -102,7 +102,7 @@ TEMPLATE_TEST_CASE("fillRotations: SLERP per triple in gaps, constant speed, end
     const hawor::Vec3<S> b = seq.row(9).segment(k, 3).transpose();
     const hawor::Vec3<S> r7 = out.row(7).segment(k, 3).transpose();
     const hawor::Vec3<S> e7 = hawor::slerpAxisAngle(a, b, S(1) / S(3));
-    CHECK((r7 - e7).norm() < tol<S>() * 10);
+    CHECK((r7 - e7).norm() < seqTol<S>() * 10);
     // equal angular steps 6 → 7 → 8 → 9
     const auto q = [&](Eigen::Index t) {
       const hawor::Vec3<S> v = out.row(t).segment(k, 3).transpose();
@@ -111,8 +111,8 @@ TEMPLATE_TEST_CASE("fillRotations: SLERP per triple in gaps, constant speed, end
     const S d67 = q(6).angularDistance(q(7));
     const S d78 = q(7).angularDistance(q(8));
     const S d89 = q(8).angularDistance(q(9));
-    CHECK(std::abs(d67 - d78) < S(100) * tol<S>());
-    CHECK(std::abs(d78 - d89) < S(100) * tol<S>());
+    CHECK(std::abs(d67 - d78) < S(100) * seqTol<S>());
+    CHECK(std::abs(d78 - d89) < S(100) * seqTol<S>());
   }
   const hawor::Sequence<S> bad = hawor::Sequence<S>::Zero(12, 4);
   CHECK_THROWS_AS(hawor::fillRotations(bad, valid), hawor::Error);
