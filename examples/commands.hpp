@@ -9,4 +9,5 @@ int cmdHand(int argc, char** argv);  // hawor hand --model M [--pose P] --out me
 int cmdFit(int argc, char** argv);   // hawor fit --model M --obs K.npz --intrinsics ... --out F
 int cmdSynth(int argc, char** argv);  // hawor synth --preset P --seed N --out DIR | --list
 int cmdSlam(int argc, char** argv);   // hawor slam --images DIR --intrinsics ... --out TRAJ.tum
+int cmdScale(int argc, char** argv);  // hawor scale --traj T.tum --keyframe-depths KD.npz ... --out M.tum
 }  // namespace hawor_cli

@@ -31,6 +31,8 @@ const char* kUsage =
     "  synth --list                                 --list prints the preset names\n"
     "  slam --images DIR --intrinsics fx,fy,cx,cy   monocular SLAM with the hands masked out\n"
     "       [--masks DIR] --out TRAJ.tum            (camera trajectory, keyframe depths)\n"
+    "  scale --traj TRAJ.tum --keyframe-depths KD.npz  metric scale of a SLAM trajectory from\n"
+    "        [--metric-depth DIR] [--hands H.npz] --out M.tum  depth maps and/or the hands\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -50,6 +52,7 @@ int main(int argc, char** argv) {
     if (cmd == "fit") return hawor_cli::cmdFit(argc, argv);
     if (cmd == "synth") return hawor_cli::cmdSynth(argc, argv);
     if (cmd == "slam") return hawor_cli::cmdSlam(argc, argv);
+    if (cmd == "scale") return hawor_cli::cmdScale(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {

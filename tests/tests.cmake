@@ -2,7 +2,7 @@
 #   test_<module>      unit/property tests, native and WASM (files not starting with ref_)
 #   test_<module>_ref  cross-checks against numpy/scipy scripts run at test time (ref_*.cpp), native
 # Python-driven end-to-end checks of the CLI: tests/cli/test_*.py, each gets the hawor binary.
-foreach(module geometry motion eval io hand render synth slam)
+foreach(module geometry motion eval io hand render synth slam scale)
   file(GLOB _all CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/${module}/*.cpp")
   set(_unit "")
   set(_ref "")

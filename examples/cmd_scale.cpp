@@ -1,0 +1,192 @@
+// hawor scale — metric scale of a SLAM trajectory (include/hawor/scale): AdaSM on metric depth
+// maps at the keyframes' sparse SLAM depths, the hand-anchored scale from camera-frame hands, or
+// both fused by confidence.
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cli_args.hpp"
+#include "commands.hpp"
+#include "hawor/io/image_file.hpp"
+#include "hawor/io/npy.hpp"
+#include "hawor/io/npz.hpp"
+#include "hawor/io/tum.hpp"
+#include "hawor/scale/scale.hpp"
+
+namespace hawor_cli {
+namespace {
+
+const char* kScaleHelp =
+    "usage: hawor scale --traj TRAJ.tum --keyframe-depths KD.npz [--metric-depth DIR_OF_NPY]\n"
+    "                   [--masks DIR] [--hands HANDS_CAM.npz] --out TRAJ_METRIC.tum\n"
+    "                   [--near M] [--far M] [--sigma M] [--baseline]\n"
+    "\n"
+    "Scales a monocular trajectory to metres.\n"
+    "  --traj TRAJ.tum        camera-to-world poses from 'hawor slam' (one per frame, in order)\n"
+    "  --keyframe-depths KD.npz  'hawor slam --keyframe-depths': frames (K,), kf (N,), uv (N,2),\n"
+    "                         depth (N,) SLAM depths at keyframe pixels\n"
+    "  --metric-depth DIR     metric depth maps, DIR/<frame:06d>.npy float (H,W) metres (a depth\n"
+    "                         network's output, or ground truth): AdaSM (near/far window,\n"
+    "                         Geman-McClure sigma) on the keyframes' pixels, median over keyframes\n"
+    "  --masks DIR            hand masks DIR/<frame:06d>.png (non-zero = hand): pixels dropped\n"
+    "  --hands HANDS_CAM.npz  camera-frame hands: [left_|right_]joints_cam (T,21,3) metres and\n"
+    "                         [left_|right_]valid (T,): the hand-anchored scale from the wrists\n"
+    "  --baseline             with --metric-depth: also report the plain median scale\n"
+    "  --out TRAJ_METRIC.tum  the trajectory with positions multiplied by the scale\n"
+    "\n"
+    "Prints {\"scale\", \"method\" (depth|hands|fused), \"confidence\", ...}. With both cues the\n"
+    "scales are combined in log space, weighted by their confidences.\n";
+
+std::string frameName(int f, const char* ext) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%06d%s", f, ext);
+  return b;
+}
+
+bool exists(const std::string& p) {
+  std::FILE* f = std::fopen(p.c_str(), "rb");
+  if (!f) return false;
+  std::fclose(f);
+  return true;
+}
+
+}  // namespace
+
+int cmdScale(int argc, char** argv) {
+  const Args args(argc, argv, 2,
+                  {"traj", "keyframe-depths", "metric-depth", "masks", "hands", "out", "near", "far", "sigma"},
+                  {"baseline"});
+  if (args.help()) {
+    std::fputs(kScaleHelp, stdout);
+    return 0;
+  }
+  const std::vector<hawor::TumPose<double>> traj = hawor::readTum<double>(args.required("traj"));
+  const std::string out = args.required("out");
+  if (!args.has("metric-depth") && !args.has("hands")) {
+    throw UsageError("give --metric-depth DIR, --hands HANDS_CAM.npz, or both");
+  }
+  if (traj.size() < 3) throw hawor::Error(args.required("traj") + ": need at least 3 poses");
+  hawor::AdaptiveScaleOptions<double> aopt;
+  aopt.nearM = args.number("near", aopt.nearM);
+  aopt.farM = args.number("far", aopt.farM);
+  aopt.sigma = args.number("sigma", aopt.sigma);
+
+  JsonObject j;
+  double depthScale = NAN, depthConf = 0, handScale = NAN, handConf = 0;
+  if (args.has("metric-depth")) {
+    const std::string kdPath = args.required("keyframe-depths");
+    const hawor::Npz kd = hawor::Npz::read(kdPath);
+    for (const char* key : {"frames", "kf", "uv", "depth"}) {
+      if (!kd.has(key)) throw hawor::Error(kdPath + ": missing array '" + key + "'");
+    }
+    const std::vector<int> frames = kd.get("frames").as<int>(kdPath + ": frames");
+    const std::vector<int> kf = kd.get("kf").as<int>(kdPath + ": kf");
+    const std::vector<double> uv = kd.get("uv").as<double>(kdPath + ": uv");
+    const std::vector<double> depth = kd.get("depth").as<double>(kdPath + ": depth");
+    if (kf.size() != depth.size() || uv.size() != 2 * depth.size()) {
+      throw hawor::Error(kdPath + ": kf, uv and depth disagree in length");
+    }
+    std::vector<std::vector<double>> d(frames.size()), D(frames.size());
+    std::vector<std::vector<char>> hand(frames.size());
+    const std::string dir = args.required("metric-depth");
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const std::string p = dir + "/" + frameName(frames[k], ".npy");
+      const hawor::NpyArray a = hawor::readNpyFile(p);
+      if (a.ndim() != 2) throw hawor::Error(p + ": expected a (H,W) depth map");
+      const int H = static_cast<int>(a.shape[0]), W = static_cast<int>(a.shape[1]);
+      const std::vector<double> m = a.as<double>(p);
+      hawor::ImageU8 mask;
+      const bool haveMask = args.has("masks") && exists(args.get("masks", "") + "/" + frameName(frames[k], ".png"));
+      if (haveMask) {
+        const std::string mp = args.get("masks", "") + "/" + frameName(frames[k], ".png");
+        mask = hawor::readImage(mp, 1);
+        if (mask.width != W || mask.height != H) throw hawor::Error(mp + ": mask size differs from the depth map " + p);
+      }
+      for (std::size_t i = 0; i < depth.size(); ++i) {
+        if (kf[i] != static_cast<int>(k)) continue;
+        const long x = std::lround(uv[2 * i]), y = std::lround(uv[2 * i + 1]);
+        if (x < 0 || y < 0 || x >= W || y >= H) continue;
+        d[k].push_back(depth[i]);
+        D[k].push_back(m[static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)]);
+        hand[k].push_back(haveMask && mask.at(int(x), int(y)) ? 1 : 0);
+      }
+    }
+    const hawor::SequenceScale<double> s = hawor::adaptiveScale(d, D, &hand, aopt);
+    j.integer("keyframes", s.keyframes).integer("keyframes_fitted", s.fitted);
+    if (s.ok()) {
+      depthScale = s.scale;
+      const double spread = std::isfinite(s.relativeSpread) ? s.relativeSpread : 1.0;
+      depthConf = double(s.fitted) / std::max(1, s.keyframes) / (1 + (spread / 0.05) * (spread / 0.05));
+      j.num("depth_scale", depthScale).num("depth_confidence", depthConf).num("depth_spread", spread);
+    }
+    if (args.flag("baseline")) {
+      const hawor::SequenceScale<double> b = hawor::medianScale(d, D, &hand);
+      if (b.ok()) j.num("median_scale", b.scale);
+    }
+  }
+  if (args.has("hands")) {
+    const std::string hp = args.required("hands");
+    const hawor::Npz z = hawor::Npz::read(hp);
+    std::vector<hawor::HandTrack<double>> tracks;
+    for (const std::string prefix : {"left_", "right_", ""}) {
+      if (!z.has(prefix + "joints_cam")) continue;
+      const hawor::NpyArray& a = z.get(prefix + "joints_cam");
+      if (a.ndim() != 3 || a.shape[2] != 3 || a.shape[0] != traj.size()) {
+        throw hawor::Error(hp + ": " + prefix + "joints_cam must be (T,K,3) with T = " + std::to_string(traj.size()) +
+                           " poses of the trajectory");
+      }
+      const std::vector<double> v = a.as<double>(hp + ": " + prefix + "joints_cam");
+      std::vector<int> valid(traj.size(), 1);
+      if (z.has(prefix + "valid")) valid = z.get(prefix + "valid").as<int>(hp + ": " + prefix + "valid");
+      if (valid.size() != traj.size()) throw hawor::Error(hp + ": " + prefix + "valid has the wrong length");
+      hawor::HandTrack<double> t;
+      const std::size_t K = a.shape[1];
+      for (std::size_t f = 0; f < traj.size(); ++f) {
+        const double* p = v.data() + f * K * 3;  // joint 0: the wrist
+        t.positionCam.emplace_back(p[0], p[1], p[2]);
+        t.valid.push_back(valid[f] ? 1 : 0);
+      }
+      tracks.push_back(std::move(t));
+      if (prefix.empty()) break;
+    }
+    if (tracks.empty()) throw hawor::Error(hp + ": no [left_|right_]joints_cam array");
+    std::vector<hawor::SE3<double>> poses;
+    for (const auto& p : traj) poses.emplace_back(hawor::SO3<double>::fromQuaternion(Eigen::Quaterniond(p.q)), hawor::Vec3<double>(p.p));
+    hawor::HandScaleOptions<double> hopt;
+    if (traj.size() >= 2 && traj[1].t > traj[0].t) hopt.fps = 1.0 / (traj[1].t - traj[0].t);
+    const hawor::HandScaleResult<double> h = hawor::handAnchoredScale(poses, tracks, hopt);
+    j.integer("hand_residuals", h.residuals).integer("hand_rest_frames", h.restFrames);
+    if (h.ok()) {
+      handScale = h.scale;
+      handConf = h.confidence;
+      j.num("hand_scale", handScale).num("hand_confidence", handConf);
+    }
+  }
+  double scale = NAN, conf = 0;
+  std::string method;
+  const bool dOk = std::isfinite(depthScale), hOk = std::isfinite(handScale);
+  if (dOk && hOk && depthConf + handConf > 0) {
+    scale = std::exp((depthConf * std::log(depthScale) + handConf * std::log(handScale)) / (depthConf + handConf));
+    conf = std::max(depthConf, handConf);
+    method = "fused";
+  } else if (dOk) {
+    scale = depthScale, conf = depthConf, method = "depth";
+  } else if (hOk) {
+    scale = handScale, conf = handConf, method = "hands";
+  } else {
+    throw hawor::Error("no metric scale could be estimated (no usable depth pixels in the window and no usable hand motion)");
+  }
+  std::vector<hawor::TumPose<double>> scaled = traj;
+  for (auto& p : scaled) p.p *= scale;
+  hawor::writeTum(out, scaled);
+  JsonObject head;
+  head.num("scale", scale).str("method", method).num("confidence", conf);
+  std::string s = head.dump();
+  const std::string rest = j.dump();
+  if (rest.size() > 2) s = s.substr(0, s.size() - 1) + ", " + rest.substr(1);
+  std::printf("%s\n", s.c_str());
+  return 0;
+}
+
+}  // namespace hawor_cli

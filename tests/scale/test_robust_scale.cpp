@@ -1,0 +1,143 @@
+// AdaSM metric scale (scale/robust_scale.hpp): the 1-D Geman–McClure fit against a brute-force
+// minimisation of the same objective, robustness to outliers and bias on generated depth pairs,
+// the adaptive window against the plain median, and degenerate input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "hawor/scale/robust_scale.hpp"
+
+namespace {
+
+/// Pairs (d, D) with D = s·d·(1 + noise), a fraction of outliers, metric depths in [0.2, 3] m.
+template <typename S>
+void makePairs(std::mt19937& rng, int n, double s, double noise, double outliers, std::vector<S>& d, std::vector<S>& D) {
+  std::uniform_real_distribution<double> U(0, 1);
+  std::normal_distribution<double> N(0, 1);
+  d.clear(), D.clear();
+  for (int i = 0; i < n; ++i) {
+    const double truth = 0.2 + 2.8 * U(rng);
+    double m = truth * (1 + noise * N(rng));
+    if (U(rng) < outliers) m = 0.05 + 4 * U(rng);
+    d.push_back(S(truth / s));
+    D.push_back(S(m));
+  }
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("GMoF scale fit reaches the brute-force minimum", "[scale]", float, double) {
+  using S = TestType;
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<S> d, D;
+    const double s = std::exp(std::uniform_real_distribution<double>(-3, 3)(rng));
+    makePairs<S>(rng, 200, s, 0.05, 0.3, d, D);
+    const S sigma = S(0.5);
+    const S a = hawor::minimiseGmofScale(d, D, sigma, S(s / 20), S(s * 20));
+    REQUIRE(std::isfinite(double(a)));
+    // Brute force: a fine log grid over the same interval, in double.
+    double best = 0, fbest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k <= 200000; ++k) {
+      const double x = s / 20 * std::pow(400.0, k / 200000.0);
+      double f = 0;
+      for (std::size_t i = 0; i < d.size(); ++i) {
+        const double r = x * double(d[i]) - double(D[i]);
+        f += 0.25 * r * r / (0.25 + r * r);
+      }
+      f /= double(d.size());
+      if (f < fbest) fbest = f, best = x;
+    }
+    const double fa = double(hawor::gmofObjective(d, D, a, sigma));
+    const double tol = std::is_same<S, float>::value ? 1e-6 : 1e-12;
+    CHECK(fa <= fbest + tol * (1 + fbest));
+    CHECK(double(a) == Approx(best).epsilon(std::is_same<S, float>::value ? 1e-3 : 1e-4));
+  }
+}
+
+namespace {
+
+/// 30 keyframes of 400 pixels: many near points and a tail of far ones; the depth network's error
+/// grows with distance (5 % + 3 % per metre); 10 % of the pixels on a hand (metric depth half the
+/// scene's: the hand in front), 10 % uniform outliers in [0.1, 5.1] m; optionally a global bias per
+/// keyframe uniform in ±10 %.
+void makeKeyframes(std::uint32_t seed, bool bias, double s, std::vector<std::vector<double>>& d,
+                   std::vector<std::vector<double>>& D, std::vector<std::vector<char>>& hand) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::normal_distribution<double> N(0, 1);
+  d.clear(), D.clear(), hand.clear();
+  for (int k = 0; k < 30; ++k) {
+    std::vector<double> dk, Dk;
+    std::vector<char> hk;
+    const double b = bias ? 1 + 0.1 * (2 * U(rng) - 1) : 1.0;
+    for (int i = 0; i < 400; ++i) {
+      const double truth = 0.25 + 3.0 * U(rng) * U(rng);
+      double m = truth * b * (1 + (0.05 + 0.03 * truth) * N(rng));
+      const bool isHand = U(rng) < 0.1;
+      if (isHand) m = 0.5 * truth;
+      if (U(rng) < 0.1) m = 0.1 + 5 * U(rng);
+      dk.push_back(truth / s);
+      Dk.push_back(m);
+      hk.push_back(isHand ? 1 : 0);
+    }
+    d.push_back(dk), D.push_back(Dk), hand.push_back(hk);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("AdaSM: outliers and distance-dependent noise, against the plain median", "[scale]") {
+  const double s = 0.37;
+  std::vector<std::vector<double>> d, D;
+  std::vector<std::vector<char>> hand;
+  for (std::uint32_t seed = 1; seed <= 5; ++seed) {
+    makeKeyframes(seed, false, s, d, D, hand);
+    const hawor::SequenceScale<double> ada = hawor::adaptiveScale(d, D, &hand);
+    const hawor::SequenceScale<double> med = hawor::medianScale(d, D, &hand);
+    REQUIRE(ada.ok());
+    REQUIRE(med.ok());
+    CHECK(ada.fitted == 30);
+    CHECK(std::abs(ada.scale / s - 1) < 0.005);
+    CHECK(std::abs(ada.scale / s - 1) < std::abs(med.scale / s - 1));
+    CHECK(ada.relativeSpread < 0.05);
+  }
+  // With a ±10 % bias per keyframe, the median over 30 keyframes still lands within a few %.
+  makeKeyframes(11, true, s, d, D, hand);
+  const hawor::SequenceScale<double> ada = hawor::adaptiveScale(d, D, &hand);
+  CHECK(std::abs(ada.scale / s - 1) < 0.03);
+  CHECK(ada.relativeSpread > 0.03);  // the keyframes disagree: the spread shows it
+}
+
+TEST_CASE("AdaSM: widening per keyframe, degenerate input never gives a NaN scale silently", "[scale]") {
+  hawor::AdaptiveScaleOptions<double> opt;
+  // Everything at 1.95 m metric depth: outside [0.4, 0.7] until far has grown to 2.0 (13 steps).
+  std::vector<double> d(100, 4.0), D(100, 1.95);
+  const hawor::KeyframeScale<double> k = hawor::adaptiveKeyframeScale(d, D, nullptr, opt);
+  REQUIRE(k.ok());
+  CHECK(k.scale == Approx(1.95 / 4).epsilon(1e-6));
+  CHECK(k.widenings == 13);
+  // The next keyframe starts from the default window again (reset per keyframe).
+  std::vector<double> d2(100, 1.0), D2(100, 0.55);
+  const hawor::KeyframeScale<double> k2 = hawor::adaptiveKeyframeScale(d2, D2, nullptr, opt);
+  CHECK(k2.widenings == 0);
+  CHECK(k2.nearM == Approx(0.4));
+  // No usable pixel: NaN per keyframe, and the sequence reports not ok.
+  std::vector<double> bad = {std::nan(""), -1.0, 0.0, std::numeric_limits<double>::infinity()};
+  std::vector<double> badD = {1.0, 1.0, 1.0, 1.0};
+  CHECK_FALSE(hawor::adaptiveKeyframeScale(bad, badD).ok());
+  std::vector<char> allMasked(100, 1);
+  CHECK_FALSE(hawor::adaptiveKeyframeScale(d2, D2, &allMasked).ok());
+  const hawor::SequenceScale<double> none = hawor::adaptiveScale<double>({bad}, {badD});
+  CHECK_FALSE(none.ok());
+  CHECK(none.fitted == 0);
+  // Mismatched lengths and invalid options throw.
+  std::vector<double> shorter(50, 1.0);
+  CHECK_THROWS_AS(hawor::adaptiveKeyframeScale(d, shorter, nullptr, opt), hawor::Error);
+  opt.farM = 0.3;
+  CHECK_THROWS_AS(hawor::adaptiveKeyframeScale(d, D, nullptr, opt), hawor::Error);
+}
