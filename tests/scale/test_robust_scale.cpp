@@ -102,7 +102,7 @@ TEST_CASE("AdaSM: outliers and distance-dependent noise, against the plain media
     REQUIRE(ada.ok());
     REQUIRE(med.ok());
     CHECK(ada.fitted == 30);
-    CHECK(std::abs(ada.scale / s - 1) < 0.005);
+    CHECK(std::abs(ada.scale / s - 1) < 0.01);  // (std distributions differ between libstdc++ and libc++)
     CHECK(std::abs(ada.scale / s - 1) < std::abs(med.scale / s - 1));
     CHECK(ada.relativeSpread < 0.05);
   }
