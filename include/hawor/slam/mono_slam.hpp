@@ -303,7 +303,6 @@ class MonoSlam {
     V3 X;
     std::vector<Obs> obs;
     bool valid = true;
-    int segment = 0;
   };
   struct Track {
     int id;
@@ -326,7 +325,6 @@ class MonoSlam {
     bool posed = false;        ///< T comes from a map (tracked) rather than a guess
     bool rotationKnown = true; ///< rotation from rays/tracking (false: only interpolate)
     int inliers = 0;
-    int segment = 0;
     std::vector<int> obsTrack;
     std::vector<Vec2f> obsUv;
   };
@@ -469,7 +467,6 @@ class MonoSlam {
   // ---------------------------------------------------------------- initialisation
   void initialise(int f) {
     Frame& fr = frames_.back();
-    fr.segment = segment_;
     // Rotation-only pose from the ray chain (position held).
     Mat3<Scalar> dR;
     if (rayRotation(dR)) {
@@ -559,7 +556,6 @@ class MonoSlam {
         MapPoint p;
         p.X = toWorld(tv.points[j]);
         p.obs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
-        p.segment = seg;
         t.point = addPoint(std::move(p), t.id);
       } else {
         t.kfObs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
@@ -583,13 +579,20 @@ class MonoSlam {
     everInitialised_ = true;
     afterLoss_ = false;
     lost_ = 0;
+    closeKeyframe(fr);
+  }
+
+  /// After a keyframe's points are in: sliding-window bundle adjustment, the frame takes the
+  /// adjusted pose, new corners fill the grid (their first keyframe observation is this one).
+  void closeKeyframe(Frame& fr) {
+    const int k = static_cast<int>(keyframes_.size()) - 1;
     adjust(lastWindow(), opt_.localIterations, false);
     fr.T = keyframes_.back().T;
     lastKfInliers_ = countMapped();
     framesSinceKf_ = 0;
     replenish();
     for (Track& t : tracks_) {
-      if (t.point < 0 && t.kfObs.empty()) t.kfObs = {Obs{k0 + 1, V2(Scalar(t.uv(0)), Scalar(t.uv(1)))}};
+      if (t.point < 0 && t.kfObs.empty()) t.kfObs = {Obs{k, V2(Scalar(t.uv(0)), Scalar(t.uv(1)))}};
     }
     updateMedianDepth();
   }
@@ -603,7 +606,6 @@ class MonoSlam {
 
   void trackPose(int f) {
     Frame& fr = frames_.back();
-    fr.segment = segment_;
     std::vector<V3> X;
     std::vector<V2> uv;
     std::vector<int> ti;
@@ -638,7 +640,6 @@ class MonoSlam {
     if (ok) {
       fr.posed = true;
       fr.status = SlamStatus::Tracked;
-      if (lost_ > 0) ++recovered_;
       lost_ = 0;
       ++framesSinceKf_;
       const int mapped = fr.inliers;
@@ -734,26 +735,17 @@ class MonoSlam {
       MapPoint p;
       p.X = X;
       p.obs = t.kfObs;
-      p.segment = segment_;
       t.point = addPoint(std::move(p), t.id);
       t.kfObs.clear();
     }
     const int before = countMapped();
-    adjust(lastWindow(), opt_.localIterations, false);
-    fr.T = keyframes_.back().T;
-    lastKfInliers_ = countMapped();
+    closeKeyframe(fr);
     if (opt_.log) {
       opt_.log("frame " + std::to_string(f) + ": keyframe " + std::to_string(k) + ", mapped tracks " +
                std::to_string(before) + " -> " + std::to_string(lastKfInliers_) + " after bundle adjustment; " +
                "triangulation: " + std::to_string(triCand) + " candidates, " + std::to_string(triParallax) +
                " with parallax, " + std::to_string(triNew) + " new points");
     }
-    framesSinceKf_ = 0;
-    replenish();
-    for (Track& t : tracks_) {
-      if (t.point < 0 && t.kfObs.empty()) t.kfObs = {Obs{k, V2(Scalar(t.uv(0)), Scalar(t.uv(1)))}};
-    }
-    updateMedianDepth();
   }
 
   void updateMedianDepth() {
@@ -1009,7 +1001,7 @@ class MonoSlam {
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
   int refFrame_ = 0, refTracks_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0;
-  int lost_ = 0, losses_ = 0, resets_ = 0, recovered_ = 0;
+  int lost_ = 0, losses_ = 0, resets_ = 0;
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
   Scalar lastMedianDepth_ = Scalar(0);
