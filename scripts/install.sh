@@ -20,10 +20,20 @@ fi
 if ! command -v npm >/dev/null; then
   apt-get install -y -qq --no-install-recommends npm >/dev/null
 fi
-# npm packages of package.json (exact versions): the licence-free default hand (MIT) ...
+# npm packages of package.json (exact versions): the licence-free default hand (MIT),
+# onnxruntime-web (the depth slot, browser and node), pngjs (PNG frames in node) ...
+# npm install runs when any of them is missing from node_modules or at another version.
 root=$(cd "$(dirname "$0")/.." && pwd)
-if [[ ! -f "$root/node_modules/@webxr-input-profiles/assets/package.json" ]]; then
-  echo "[install] npm install" >&2
+missing_npm=$(cd "$root" && node -e '
+  const fs = require("fs");
+  const deps = JSON.parse(fs.readFileSync("package.json", "utf8")).dependencies || {};
+  for (const [name, version] of Object.entries(deps)) {
+    let have = null;
+    try { have = JSON.parse(fs.readFileSync(`node_modules/${name}/package.json`, "utf8")).version; } catch {}
+    if (have !== version) console.log(`${name}@${version}`);
+  }')
+if [[ -n "$missing_npm" ]]; then
+  echo "[install] npm install ($(echo $missing_npm))" >&2
   (cd "$root" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
 fi
 echo "[install] toolchain ready: $(cmake --version | head -1); $(em++ --version 2>/dev/null | head -1 | cut -c1-60); node $(node --version)" >&2

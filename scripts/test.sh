@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs every test: native (Release), parsers under ASan+UBSan (+ libFuzzer briefly, clang),
-# the same unit tests compiled to WebAssembly under node. Ends with "N passed, N failed".
+# Runs every test: native (Release), the JavaScript tests under node (tests/web), parsers under
+# ASan+UBSan (+ libFuzzer briefly, clang), the same unit tests compiled to WebAssembly under
+# node. Ends with "N passed, N failed".
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -38,7 +39,33 @@ run_suite() {
   ((fail == 0)) || status=1
 }
 
+# run_node_suite: the JavaScript tests (tests/web, node's own runner, onnxruntime-web's wasm
+# build) against the native binary just built; tallies node's "# pass N" / "# fail N". The
+# files are listed by the shell (node 18 and 20 also take the folder, node 22 only patterns);
+# no flag is needed on node 18 or 20 (onnxruntime-web reads its .wasm from disk in node).
+run_node_suite() {
+  echo "=== [node] node --test tests/web" >&2
+  if [[ ! -f node_modules/onnxruntime-web/package.json ]]; then
+    echo "[node] node_modules/onnxruntime-web missing: run scripts/install.sh" >&2
+    total_fail=$((total_fail + 1)); status=1; return
+  fi
+  HAWOR_BIN="$root/build/native/examples/hawor" node --test --test-reporter=tap tests/web/*.test.mjs \
+    2>&1 | tee "$log_dir/node-test.log"
+  local rc=${PIPESTATUS[0]} pass fail
+  pass=$(grep -E '^# pass [0-9]+$' "$log_dir/node-test.log" | tail -1 | awk '{print $3}')
+  fail=$(grep -E '^# fail [0-9]+$' "$log_dir/node-test.log" | tail -1 | awk '{print $3}')
+  if [[ -z "$pass" || -z "$fail" ]]; then
+    echo "[node] no test summary" >&2; total_fail=$((total_fail + 1)); status=1; return
+  fi
+  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
+  if ((fail == 0 && rc != 0)); then
+    echo "[node] node --test exited $rc" >&2; total_fail=$((total_fail + 1))
+  fi
+  ((fail == 0 && rc == 0)) || status=1
+}
+
 run_suite native cmake -DCMAKE_BUILD_TYPE=Release
+run_node_suite
 if command -v clang++ >/dev/null; then
   run_suite sanitize env CC=clang CXX=clang++ cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_FUZZ=ON -DHAWOR_BUILD_EXAMPLES=OFF
 else
