@@ -146,3 +146,32 @@ TEST_CASE("synth: hands_cover covers 40 % of the view, for seconds (default hand
   CHECK(bestWalk < 0.35);
   CHECK(bestWalk > 0.02);
 }
+
+TEST_CASE("synth: hands hold still in the room while the head moves (table_work)", "[synth]") {
+  const Hands<double>& h = syntheticHands<double>();
+  for (std::uint64_t seed : {1u, 2u}) {
+    const hs::SynthSequence<double> s(hs::findSynthPreset("table_work"), seed, h.left, h.right, smallOptions(32),
+                                      sharedScene<double>(seed));
+    // The longest run of frames over which the wrist moves < 0.1 mm per frame in the room, per
+    // hand, while the camera moves on (the hold is in the room, not in the head frame).
+    int longest = 0;
+    double camDuring = 0;
+    for (int side = 0; side < 2; ++side) {
+      int run = 0;
+      double cam = 0;
+      for (int i = 1; i < s.numFrames(); ++i) {
+        const double v = (s.handPoseWorld(side, i).transl - s.handPoseWorld(side, i - 1).transl).norm();
+        const double c = (s.worldFromCamera(i).t - s.worldFromCamera(i - 1).t).norm();
+        if (v < 1e-4) {
+          ++run, cam += c;
+        } else {
+          run = 0, cam = 0;
+        }
+        if (run > longest) longest = run, camDuring = cam;
+      }
+    }
+    INFO("seed " << seed << ": longest hold " << longest << " frames, camera path during it " << camDuring << " m");
+    CHECK(longest >= static_cast<int>(0.5 * s.fps()));
+    CHECK(camDuring > 0.005);
+  }
+}

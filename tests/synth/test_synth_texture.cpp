@@ -130,7 +130,7 @@ TEST_CASE("synth: every tracking preset shows enough corners outside the hands",
       ++frames;
     }
     INFO(p.name << ": fewest corners in a frame " << worst);
-    CHECK(worst >= 25);
+    CHECK(worst >= 20);  // at 160x120, hands and low-texture walls in view
     // Exposure: neither dark nor washed out.
     CHECK(sumMean / frames > 60);
     CHECK(sumMean / frames < 200);

@@ -50,6 +50,19 @@ struct HandBehaviour {
   double moveMin = 0.5, moveMax = 1.2;  ///< time between targets inside a phase
   double startInView = 0.7;             ///< probability that a hand starts in view
   double maxInView = 6.0;               ///< longest continuous stay in view; then the hand leaves
+  /// The body the hands hang from follows the camera centre smoothed by a Gaussian of this
+  /// standard deviation (s): it shares the head's walk but not its bob, sway, jitter and the
+  /// lever arm of the neck (sequence.hpp). 0 glues the hands to the camera centre.
+  double bodySmoothSeconds = 0.3;
+  /// Holds: after an in-view key, with this chance the hand stays still IN THE ROOM (holding or
+  /// resting on something) for holdMin–holdMax seconds, eased in and out over holdEase seconds.
+  double holdChance = 0.0;
+  double holdMin = 0.6, holdMax = 1.6, holdEase = 0.25;
+};
+
+/// A hold of one hand: the wrist and its orientation stay fixed in the room over [t0, t1].
+struct HandHold {
+  double t0 = 0, t1 = 0;
 };
 
 /// One key of a hand plan (head frame).
@@ -74,6 +87,7 @@ template <typename Scalar>
 class HandPlan {
  public:
   std::vector<HandKey<Scalar>> keys;
+  std::vector<HandHold> holds;  ///< in time order, disjoint (applied in the room by sequence.hpp)
   SmoothSignal<Scalar> posJitter, rotJitter, curlJitter;
 
   /// State at time t (clamped to the keys' span).
@@ -232,6 +246,16 @@ HandPlan<Scalar> makeHandPlan(const HandRig<Scalar>& rig, const HandBehaviour& b
       const double end = t + rng.uniform(b.inViewMin, b.inViewMax);
       while (t < end) {
         plan.keys.push_back(inKey(t));
+        if (b.holdChance > 0 && rng.chance(b.holdChance)) {
+          // The same key again after the hold: the head-frame path pauses, the room-frame
+          // freeze is applied by the sequence.
+          const double h = rng.uniform(b.holdMin, b.holdMax);
+          plan.holds.push_back({t, t + h});
+          HandKey<Scalar> k = plan.keys.back();
+          k.t = t + h;
+          plan.keys.push_back(k);
+          t += h;
+        }
         t += rng.uniform(b.moveMin, b.moveMax);
       }
     } else {

@@ -7,6 +7,8 @@
 //   pure_rotation  the eye fixed, looking around (the degenerate case for two-view geometry)
 //   hands_cover    at the table with both hands close to the camera: 40–60 % of the image
 //                  covered for seconds at a time
+// Every preset has holds (a hand still in the room for about a second, holding or resting on
+// something): most at the table, few while walking.
 // Thread-safety: functions return values; no shared state.
 #pragma once
 
@@ -45,6 +47,7 @@ inline std::vector<SynthPreset> synthPresets() {
     p.hands.lateralMin = 0.05, p.hands.lateralMax = 0.22;
     p.hands.heightMin = 0.06, p.hands.heightMax = 0.2;
     p.hands.lagSeconds = 0.2;
+    p.hands.holdChance = 0.1;
     out.push_back(p);
   }
   {
@@ -61,6 +64,7 @@ inline std::vector<SynthPreset> synthPresets() {
     p.hands.heightMin = 0.0, p.hands.heightMax = 0.15;
     p.hands.lagSeconds = 0.3;
     p.hands.startInView = 0.85;
+    p.hands.holdChance = 0.4;
     out.push_back(p);
   }
   {
@@ -71,6 +75,7 @@ inline std::vector<SynthPreset> synthPresets() {
     p.frames = 300;
     p.hands.inViewChance = 0.7;
     p.hands.lagSeconds = 0.35;
+    p.hands.holdChance = 0.2;
     out.push_back(p);
   }
   {
@@ -81,6 +86,7 @@ inline std::vector<SynthPreset> synthPresets() {
     p.frames = 300;
     p.hands.inViewChance = 0.7;
     p.hands.lagSeconds = 0.3;
+    p.hands.holdChance = 0.2;
     out.push_back(p);
   }
   {
@@ -101,6 +107,7 @@ inline std::vector<SynthPreset> synthPresets() {
     p.hands.lagSeconds = 0.1;
     p.hands.startInView = 1.0;
     p.hands.maxInView = 8.0;
+    p.hands.holdChance = 0.3;
     out.push_back(p);
   }
   return out;

@@ -14,8 +14,11 @@
 // camera frame (joints_cam = T_c_w · joints_world).
 // Placement: hand_motion.hpp plans each hand in a head frame that follows the camera's
 // rotation with the preset's lag (exponential smoothing of the rotation, rate
-// α = 1 − exp(−1/(lag·fps)) per frame, centred on the camera); head-frame wrist p and
-// orientation R_h map to the room as eye + R_lag·p and R_lag·R_h.
+// α = 1 − exp(−1/(lag·fps)) per frame), centred on the body: the camera centre smoothed by a
+// Gaussian (bodySmoothSeconds), so the hands share the walk but not the head's bob, sway and
+// neck lever arm; head-frame wrist p and orientation R_h map to the room as body + R_lag·p and
+// R_lag·R_h. During a plan's holds the hand is frozen in the room (eased in and out): a hand
+// holding or resting on something while the head moves.
 // Visibility: `valid` = the hand has at least minVisiblePixels pixels of its own in the image
 // (nearest surface there; a hand hidden by the scene or the other hand, or out of view, is
 // invalid); per keypoint `inImage` = in front of the camera (z > 1 cm) and projecting inside the
@@ -256,6 +259,34 @@ class SynthSequence {
       q.normalize();
       head[static_cast<std::size_t>(i)] = q.toRotationMatrix();
     }
+    // Body: the camera centre smoothed by a Gaussian of σ = bodySmoothSeconds, truncated at 3σ,
+    // the path reflected oddly about its ends (c_{−k} = 2c_0 − c_k) so a straight walk is kept.
+    std::vector<Vec3<Scalar>> body(static_cast<std::size_t>(frames_));
+    const double sb = preset_.hands.bodySmoothSeconds * opt_.fps;
+    const int rad = sb > 0 ? static_cast<int>(std::ceil(3 * sb)) : 0;
+    auto centre = [&](int j) -> Vec3<Scalar> {
+      const int n = frames_ - 1;
+      if (j < 0) return Vec3<Scalar>(2 * roomFromCamera_[0].t - roomFromCamera_[static_cast<std::size_t>(std::min(-j, n))].t);
+      if (j > n) {
+        return Vec3<Scalar>(2 * roomFromCamera_[static_cast<std::size_t>(n)].t -
+                            roomFromCamera_[static_cast<std::size_t>(std::max(2 * n - j, 0))].t);
+      }
+      return roomFromCamera_[static_cast<std::size_t>(j)].t;
+    };
+    for (int i = 0; i < frames_; ++i) {
+      if (rad == 0) {
+        body[static_cast<std::size_t>(i)] = roomFromCamera_[static_cast<std::size_t>(i)].t;
+        continue;
+      }
+      Vec3<Scalar> acc = Vec3<Scalar>::Zero();
+      double wsum = 0;
+      for (int j = i - rad; j <= i + rad; ++j) {
+        const double w = std::exp(-0.5 * double(j - i) * double(j - i) / (sb * sb));
+        acc += Scalar(w) * centre(j);
+        wsum += w;
+      }
+      body[static_cast<std::size_t>(i)] = acc / Scalar(wsum);
+    }
     // Shape: one person, both hands (random when the model has shape coefficients).
     SynthRng shapeRng(seed_, 2);
     VecX<Scalar> betas[2];
@@ -275,12 +306,48 @@ class SynthSequence {
       HandWorkspace<Scalar> ws;
       shapeHand(*models_[static_cast<std::size_t>(s)], betas[s], ws);
       root_[static_cast<std::size_t>(s)] = ws.jRest.row(0).transpose();
+      // Room-frame wrist and orientation of the unfrozen path at frame i.
+      auto roomAt = [&](int i, Vec3<Scalar>& wrist, Mat3<Scalar>& R, HandState<Scalar>& st) {
+        const std::size_t fi = static_cast<std::size_t>(std::max(0, std::min(frames_ - 1, i)));
+        st = hp.at(static_cast<double>(i) / opt_.fps);
+        wrist = body[fi] + head[fi] * st.wrist;
+        R = head[fi] * st.R;
+      };
+      // Holds: frozen wrist F and orientation at the hold's first frame; weight 1 inside, eased
+      // (smoothstep) over holdEase before and after, so position and velocity stay continuous.
+      struct Frozen {
+        double t0, t1;
+        Vec3<Scalar> wrist;
+        Eigen::Quaternion<Scalar> q;
+      };
+      std::vector<Frozen> frozen;
+      for (const HandHold& h : hp.holds) {
+        Vec3<Scalar> w;
+        Mat3<Scalar> R;
+        HandState<Scalar> st;
+        roomAt(static_cast<int>(std::lround(h.t0 * opt_.fps)), w, R, st);
+        frozen.push_back({h.t0, h.t1, w, matrixToQuaternion(R)});
+      }
+      const double ease = std::max(1e-6, preset_.hands.holdEase);
       for (int i = 0; i < frames_; ++i) {
         const std::size_t fi = static_cast<std::size_t>(i);
-        const HandState<Scalar> st = hp.at(static_cast<double>(i) / opt_.fps);
-        const RigidPose<Scalar>& rc = roomFromCamera_[fi];
-        const Vec3<Scalar> wristRoom = rc.t + head[fi] * st.wrist;
-        const Mat3<Scalar> Rroom = head[fi] * st.R;
+        const double t = static_cast<double>(i) / opt_.fps;
+        HandState<Scalar> st;
+        Vec3<Scalar> wristRoom;
+        Mat3<Scalar> Rroom;
+        roomAt(i, wristRoom, Rroom, st);
+        Scalar wBest = Scalar(0);
+        const Frozen* fz = nullptr;
+        for (const Frozen& f : frozen) {
+          const double u = t < f.t0 ? 1 - (f.t0 - t) / ease : t > f.t1 ? 1 - (t - f.t1) / ease : 1.0;
+          const Scalar w = u <= 0 ? Scalar(0) : smoothstep(Scalar(std::min(1.0, u)));
+          if (w > wBest) wBest = w, fz = &f;
+        }
+        if (fz) {
+          wristRoom = (Scalar(1) - wBest) * wristRoom + wBest * fz->wrist;
+          Eigen::Quaternion<Scalar> q = matrixToQuaternion(Rroom);
+          Rroom = q.slerp(wBest, fz->q).toRotationMatrix();
+        }
         // World frame: R_w = R_w_room·R_room, wrist_w = T_w_room·wrist_room.
         out[fi] = rigs_[static_cast<std::size_t>(s)]->pose(worldFromRoom_ * wristRoom, Mat3<Scalar>(worldFromRoom_.R * Rroom),
                                                             st.gesture, betas[s], ws);
