@@ -20,7 +20,8 @@ namespace {
 const char* kScaleHelp =
     "usage: hawor scale --traj TRAJ.tum --keyframe-depths KD.npz [--metric-depth DIR_OF_NPY]\n"
     "                   [--masks DIR] [--hands HANDS_CAM.npz] --out TRAJ_METRIC.tum\n"
-    "                   [--near M] [--far M] [--sigma M] [--baseline]\n"
+    "                   [--near M] [--far M] [--sigma M] [--sampling official|slam-depth]\n"
+    "                   [--baseline]\n"
     "\n"
     "Scales a monocular trajectory to metres.\n"
     "  --traj TRAJ.tum        camera-to-world poses from 'hawor slam' (one per frame, in order)\n"
@@ -32,7 +33,13 @@ const char* kScaleHelp =
     "  --masks DIR            hand masks DIR/<frame:06d>.png (non-zero = hand): pixels dropped\n"
     "  --hands HANDS_CAM.npz  camera-frame hands: [left_|right_]joints_cam (T,21,3) metres and\n"
     "                         [left_|right_]valid (T,): the hand-anchored scale from the wrists\n"
-    "  --baseline             with --metric-depth: also report the plain median scale\n"
+    "                         (hands holding still while the head moves; else their smoothness)\n"
+    "  --sampling S           AdaSM's re-selection window on the metric depth and the scaled SLAM\n"
+    "                         depth ('official', DESIGN 6) or on the scaled SLAM depth only\n"
+    "                         plus a +-25 % gate about it ('slam-depth', default: no truncation\n"
+    "                         bias with sparse depths; windows widened to 30 points, not 10)\n"
+    "  --baseline             with --metric-depth: also report the plain median scale and the\n"
+    "                         other sampling's scale\n"
     "  --out TRAJ_METRIC.tum  the trajectory with positions multiplied by the scale\n"
     "\n"
     "Prints {\"scale\", \"method\" (depth|hands|fused), \"confidence\", ...}. With both cues the\n"
@@ -55,7 +62,7 @@ bool exists(const std::string& p) {
 
 int cmdScale(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"traj", "keyframe-depths", "metric-depth", "masks", "hands", "out", "near", "far", "sigma"},
+                  {"traj", "keyframe-depths", "metric-depth", "masks", "hands", "out", "near", "far", "sigma", "sampling"},
                   {"baseline"});
   if (args.help()) {
     std::fputs(kScaleHelp, stdout);
@@ -71,6 +78,15 @@ int cmdScale(int argc, char** argv) {
   aopt.nearM = args.number("near", aopt.nearM);
   aopt.farM = args.number("far", aopt.farM);
   aopt.sigma = args.number("sigma", aopt.sigma);
+  const std::string sampling = args.get("sampling", "slam-depth");
+  if (sampling == "official") {
+    aopt.sampling = hawor::AdaSmSampling::Official;
+  } else if (sampling == "slam-depth") {
+    aopt.sampling = hawor::AdaSmSampling::SlamDepth;
+    aopt.minPixels = 30;  // sparse SLAM depths: a window of 10 points is too noisy
+  } else {
+    throw UsageError("--sampling must be 'official' or 'slam-depth', not '" + sampling + "'");
+  }
 
   JsonObject j;
   double depthScale = NAN, depthConf = 0, handScale = NAN, handConf = 0;
@@ -116,13 +132,18 @@ int cmdScale(int argc, char** argv) {
     j.integer("keyframes", s.keyframes).integer("keyframes_fitted", s.fitted);
     if (s.ok()) {
       depthScale = s.scale;
-      const double spread = std::isfinite(s.relativeSpread) ? s.relativeSpread : 1.0;
-      depthConf = double(s.fitted) / std::max(1, s.keyframes) / (1 + (spread / 0.05) * (spread / 0.05));
-      j.num("depth_scale", depthScale).num("depth_confidence", depthConf).num("depth_spread", spread);
+      depthConf = hawor::depthScaleConfidence(s);
+      j.num("depth_scale", depthScale).num("depth_confidence", depthConf).num("depth_spread", s.relativeSpread);
     }
     if (args.flag("baseline")) {
       const hawor::SequenceScale<double> b = hawor::medianScale(d, D, &hand);
       if (b.ok()) j.num("median_scale", b.scale);
+      hawor::AdaptiveScaleOptions<double> other = aopt;
+      other.sampling = aopt.sampling == hawor::AdaSmSampling::Official ? hawor::AdaSmSampling::SlamDepth
+                                                                       : hawor::AdaSmSampling::Official;
+      other.minPixels = other.sampling == hawor::AdaSmSampling::Official ? 10 : 30;
+      const hawor::SequenceScale<double> o = hawor::adaptiveScale(d, D, &hand, other);
+      if (o.ok()) j.num(other.sampling == hawor::AdaSmSampling::Official ? "official_scale" : "slam_depth_scale", o.scale);
     }
   }
   if (args.has("hands")) {
@@ -154,34 +175,31 @@ int cmdScale(int argc, char** argv) {
     std::vector<hawor::SE3<double>> poses;
     for (const auto& p : traj) poses.emplace_back(hawor::SO3<double>::fromQuaternion(Eigen::Quaterniond(p.q)), hawor::Vec3<double>(p.p));
     hawor::HandScaleOptions<double> hopt;
-    if (traj.size() >= 2 && traj[1].t > traj[0].t) hopt.fps = 1.0 / (traj[1].t - traj[0].t);
+    if (traj.size() >= 2 && traj[1].t > traj[0].t) {
+      const double fps = 1.0 / (traj[1].t - traj[0].t);
+      hopt.smoothness.fps = fps;
+      hopt.hold.window = std::max(5, static_cast<int>(std::lround(0.5 * fps)));  // half a second
+    }
     const hawor::HandScaleResult<double> h = hawor::handAnchoredScale(poses, tracks, hopt);
-    j.integer("hand_residuals", h.residuals).integer("hand_rest_frames", h.restFrames);
+    j.str("hand_cue", h.method).integer("hand_residuals", h.residuals).integer("hand_rest", h.restFrames);
     if (h.ok()) {
       handScale = h.scale;
       handConf = h.confidence;
       j.num("hand_scale", handScale).num("hand_confidence", handConf);
     }
   }
-  double scale = NAN, conf = 0;
-  std::string method;
-  const bool dOk = std::isfinite(depthScale), hOk = std::isfinite(handScale);
-  if (dOk && hOk && depthConf + handConf > 0) {
-    scale = std::exp((depthConf * std::log(depthScale) + handConf * std::log(handScale)) / (depthConf + handConf));
-    conf = std::max(depthConf, handConf);
-    method = "fused";
-  } else if (dOk) {
-    scale = depthScale, conf = depthConf, method = "depth";
-  } else if (hOk) {
-    scale = handScale, conf = handConf, method = "hands";
-  } else {
-    throw hawor::Error("no metric scale could be estimated (no usable depth pixels in the window and no usable hand motion)");
+  const hawor::FusedScale<double> fused = hawor::fuseScales(depthScale, depthConf, handScale, handConf);
+  if (!fused.ok()) {
+    throw hawor::Error(
+        "no metric scale could be estimated: no keyframe had usable metric depth, and no hand held still while the "
+        "camera moved nor gave a positive smoothness scale");
   }
+  const double scale = fused.scale;
   std::vector<hawor::TumPose<double>> scaled = traj;
   for (auto& p : scaled) p.p *= scale;
   hawor::writeTum(out, scaled);
   JsonObject head;
-  head.num("scale", scale).str("method", method).num("confidence", conf);
+  head.num("scale", scale).str("method", fused.method).num("confidence", fused.confidence);
   std::string s = head.dump();
   const std::string rest = j.dump();
   if (rest.size() > 2) s = s.substr(0, s.size() - 1) + ", " + rest.substr(1);

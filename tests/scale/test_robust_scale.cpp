@@ -113,6 +113,37 @@ TEST_CASE("AdaSM: outliers and distance-dependent noise, against the plain media
   CHECK(ada.relativeSpread > 0.03);  // the keyframes disagree: the spread shows it
 }
 
+TEST_CASE("AdaSM: sampling on the SLAM depth removes the truncation bias of sparse windows", "[scale]") {
+  // Sparse keyframes like a SLAM's: 150 points, depth density growing with distance (few in the
+  // 0.4–0.7 m window, so it widens), 8 % noise, no outliers, no bias. Selecting on the noisy
+  // metric depth keeps the points whose noise pushed them inside the window: D/d low on average.
+  const double s = 2.3;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::normal_distribution<double> N(0, 1);
+  double errOfficial = 0, errSlam = 0;
+  const int trials = 40;
+  for (int trial = 0; trial < trials; ++trial) {
+    std::vector<std::vector<double>> d(20), D(20);
+    for (int k = 0; k < 20; ++k) {
+      for (int i = 0; i < 150; ++i) {
+        const double truth = 0.5 + 3.5 * std::sqrt(U(rng));
+        d[k].push_back(truth / s);
+        D[k].push_back(truth * (1 + 0.08 * N(rng)));
+      }
+    }
+    hawor::AdaptiveScaleOptions<double> o;
+    errOfficial += hawor::adaptiveScale(d, D, nullptr, o).scale / s - 1;
+    o.sampling = hawor::AdaSmSampling::SlamDepth;
+    errSlam += hawor::adaptiveScale(d, D, nullptr, o).scale / s - 1;
+  }
+  errOfficial /= trials, errSlam /= trials;
+  INFO("mean relative error: official sampling " << errOfficial << ", SLAM-depth sampling " << errSlam);
+  CHECK(errOfficial < -0.01);             // the bias the variant removes (negative: D truncated)
+  CHECK(std::abs(errSlam) < 0.005);
+  CHECK(std::abs(errSlam) < 0.3 * std::abs(errOfficial));
+}
+
 TEST_CASE("AdaSM: widening per keyframe, degenerate input never gives a NaN scale silently", "[scale]") {
   hawor::AdaptiveScaleOptions<double> opt;
   // Everything at 1.95 m metric depth: outside [0.4, 0.7] until far has grown to 2.0 (13 steps).

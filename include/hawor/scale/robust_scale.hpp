@@ -15,6 +15,17 @@
 //      from step 1, up to maxWidenings times. The widening is reset for every keyframe (the
 //      original carries it over to all later keyframes, a bug not copied).
 // The scale is the median of the keyframes' α. Pure functions, thread-safe.
+//
+// Sampling::SlamDepth (an option; Official is the default): steps 2–3 select the pixels by the
+// SLAM depth, near < s·d_i < far, plus a gate symmetric about the prediction,
+// |D_i / (s·d_i) − 1| < gate, instead of by the metric depth D_i. Selecting on the noisy D_i
+// truncates its noise at the window's edges (a pixel whose D_i fell below `far` is kept, its twin
+// that rose above is not), which biases D/d low wherever the window holds few points — the usual
+// case with a sparse SLAM's depths, where the window is widened until it holds minPixels. d_i is
+// independent of the depth network's noise, so selecting on it does not bias the ratio; the gate
+// still drops the outliers the official D-window dropped (σ = 0.5 m alone barely does at these
+// depths). With sparse depths use minPixels ≈ 30 ('hawor scale' does; bench_scale.py measures
+// both samplings).
 #pragma once
 
 #include <algorithm>
@@ -83,8 +94,12 @@ Scalar minimiseGmofScale(const std::vector<Scalar>& d, const std::vector<Scalar>
   return double(gmofObjective(d, D, Scalar(x), sigma)) <= fbest ? Scalar(x) : Scalar(at(best));
 }
 
+/// Which depth selects the pixels in AdaSM's re-selection and fit (file comment).
+enum class AdaSmSampling { Official, SlamDepth };
+
 template <typename Scalar>
 struct AdaptiveScaleOptions {
+  AdaSmSampling sampling = AdaSmSampling::Official;
   Scalar nearM = Scalar(0.4);   ///< adaptive sampling window (metres of metric depth)
   Scalar farM = Scalar(0.7);
   Scalar sigma = Scalar(0.5);   ///< GMoF scale (metres)
@@ -92,6 +107,7 @@ struct AdaptiveScaleOptions {
   int maxWidenings = 20;        ///< per keyframe: near −= 0.1, far += 0.1
   Scalar widenStep = Scalar(0.1);
   int minPixels = 10;           ///< fewer kept pixels than this counts as "nothing kept"
+  Scalar gate = Scalar(0.25);   ///< SlamDepth sampling: keep |D/(s·d) − 1| < gate
 };
 
 /// The result for one keyframe: α (NaN when nothing could be fitted), the median start, the
@@ -138,7 +154,7 @@ KeyframeScale<Scalar> adaptiveKeyframeScale(const std::vector<Scalar>& slamDepth
     throw Error("adaptiveKeyframeScale: SLAM depths, metric depths and mask differ in length");
   }
   if (!(opt.nearM >= Scalar(0)) || !(opt.farM > opt.nearM) || !(opt.sigma > Scalar(0)) || opt.medianIterations < 0 ||
-      opt.maxWidenings < 0 || !(opt.widenStep > Scalar(0)) || opt.minPixels < 1) {
+      opt.maxWidenings < 0 || !(opt.widenStep > Scalar(0)) || opt.minPixels < 1 || !(opt.gate > Scalar(0))) {
     throw Error("adaptiveKeyframeScale: invalid options (need 0 <= near < far, sigma > 0)");
   }
   KeyframeScale<Scalar> out;
@@ -159,9 +175,13 @@ KeyframeScale<Scalar> adaptiveKeyframeScale(const std::vector<Scalar>& slamDepth
         ratio.clear(), dk.clear(), Dk.clear();
         for (std::size_t i = 0; i < n; ++i) {
           const Scalar d = slamDepth[i], D = metricDepth[i];
-          if (!scale_detail::usable(d, D, masked, i) || !(D > nearM && D < farM)) continue;
+          if (!scale_detail::usable(d, D, masked, i)) continue;
           const Scalar ds = d * s;
-          if (!(ds > Scalar(0) && ds < farM)) continue;
+          if (opt.sampling == AdaSmSampling::Official
+                  ? !(D > nearM && D < farM && ds > Scalar(0) && ds < farM)
+                  : !(ds > nearM && ds < farM && std::abs(D / ds - Scalar(1)) < opt.gate)) {
+            continue;
+          }
           ratio.push_back(D / d);
           dk.push_back(d);
           Dk.push_back(D);

@@ -1,7 +1,11 @@
 // hawor/scale/scale.hpp — metric scale of the monocular trajectory (issue 5, DESIGN §6): the
 // official adaptive-sampling Geman–McClure fit on metric depth (and its plain-median baseline),
-// and the hand-anchored scale that needs no depth network.
+// the hand-anchored scale that needs no depth network (holds, then smoothness), and their fusion.
 #pragma once
 
 #include "robust_scale.hpp"
+#include "hand_track.hpp"
+#include "hand_hold_scale.hpp"
+#include "hand_smoothness_scale.hpp"
 #include "hand_scale.hpp"
+#include "fuse_scale.hpp"

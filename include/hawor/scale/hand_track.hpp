@@ -1,0 +1,54 @@
+// hawor/scale/hand_track.hpp — the input and the result of the hand-anchored metric scale
+// (hand_scale.hpp): a hand's camera-frame metric positions per frame, and what a scale cue found.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "hawor/common.hpp"
+#include "hawor/geometry/se3.hpp"
+
+namespace hawor {
+
+/// One hand's camera-frame metric positions h_t (T) with validity (e.g. the fitted wrist).
+template <typename Scalar>
+struct HandTrack {
+  std::vector<Vec3<Scalar>> positionCam;
+  std::vector<char> valid;
+};
+
+template <typename Scalar>
+struct HandScaleResult {
+  Scalar scale = std::numeric_limits<Scalar>::quiet_NaN();
+  Scalar relativeStdError = std::numeric_limits<Scalar>::quiet_NaN();
+  Scalar confidence = Scalar(0);
+  std::string method;    ///< "holds" or "smoothness": the cue that gave the scale
+  int residuals = 0;     ///< smoothness: second-difference residuals; holds: windows examined
+  int restFrames = 0;    ///< smoothness: velocity residuals of resting hands; holds: windows held
+  bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
+};
+
+namespace scale_detail {
+
+/// Throws unless every track has one position and one flag per camera pose.
+template <typename Scalar>
+void checkTracks(const char* who, const std::vector<SE3<Scalar>>& T_w_c, const std::vector<HandTrack<Scalar>>& hands) {
+  for (std::size_t h = 0; h < hands.size(); ++h) {
+    if (hands[h].positionCam.size() != T_w_c.size() || hands[h].valid.size() != T_w_c.size()) {
+      throw Error(std::string(who) + ": hand " + std::to_string(h) + " has " + std::to_string(hands[h].positionCam.size()) +
+                  " positions and " + std::to_string(hands[h].valid.size()) + " flags for " + std::to_string(T_w_c.size()) +
+                  " camera poses");
+    }
+  }
+}
+
+/// Frame t of a track is usable: valid, finite position, finite camera pose.
+template <typename Scalar>
+bool usableFrame(const std::vector<SE3<Scalar>>& T_w_c, const HandTrack<Scalar>& h, std::size_t t) {
+  return h.valid[t] && h.positionCam[t].allFinite() && T_w_c[t].translation().allFinite() &&
+         T_w_c[t].rotation().matrix().allFinite();
+}
+
+}  // namespace scale_detail
+}  // namespace hawor
