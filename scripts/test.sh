@@ -15,7 +15,7 @@ mkdir -p "$log_dir"
 # run_suite NAME CONFIGURE-COMMAND...: configure, build, ctest; tallies ctest's summary.
 run_suite() {
   local name=$1; shift
-  local dir=build/$name
+  local dir=build/$name t0=$SECONDS
   echo "=== [$name] configure + build" >&2
   if ! "$@" -S . -B "$dir" >"$log_dir/$name-configure.log" 2>&1; then
     tail -30 "$log_dir/$name-configure.log" >&2; echo "[$name] configure FAILED" >&2
@@ -25,7 +25,7 @@ run_suite() {
     grep -E "error|Error" "$log_dir/$name-build.log" | head -30 >&2; echo "[$name] build FAILED" >&2
     total_fail=$((total_fail + 1)); status=1; return
   fi
-  echo "=== [$name] ctest" >&2
+  echo "=== [$name] built in $((SECONDS - t0)) s; ctest" >&2
   ctest --test-dir "$dir" --output-on-failure -j"$jobs" 2>&1 | tee "$log_dir/$name-ctest.log"
   local line pass fail of
   line=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log_dir/$name-ctest.log" | tail -1)
@@ -37,6 +37,7 @@ run_suite() {
   pass=$((of - fail))
   total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
   ((fail == 0)) || status=1
+  echo "=== [$name] done in $((SECONDS - t0)) s" >&2
 }
 
 # run_node_suite: the JavaScript tests (tests/web, node's own runner, onnxruntime-web's wasm
