@@ -16,19 +16,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "ref"))
 import gltf_make  # noqa: E402
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = sys.argv[1]
 ASSETS = os.path.join(HERE, "..", "..", "node_modules", "@webxr-input-profiles", "assets", "dist", "profiles",
                       "generic-hand")
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, detail)
 
 
 def run(*args):
@@ -120,8 +113,7 @@ def main():
         rc, so, se = run("convert-hand", "--help")
         check("help", rc == 0 and "convert-hand" in so)
 
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 if __name__ == "__main__":

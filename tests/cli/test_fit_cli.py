@@ -27,20 +27,13 @@ import hand_forward as hf  # noqa: E402
 import hand_make_mano as hm  # noqa: E402
 import metrics_np as M  # noqa: E402
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = os.path.abspath(sys.argv[1])
 ASSETS = os.path.join(ROOT, "node_modules", "@webxr-input-profiles", "assets", "dist", "profiles", "generic-hand")
 FX, FY, CX, CY = 550.0, 540.0, 320.0, 240.0
 INTR = "%g,%g,%g,%g" % (FX, FY, CX, CY)
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args, cwd=None):
@@ -266,8 +259,7 @@ def main():
         pkl, kp2d, kp3d = mano_case(tmp, rng)
         default_case(tmp, rng)
         error_cases(tmp, rng, pkl, kp2d, kp3d)
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 if __name__ == "__main__":

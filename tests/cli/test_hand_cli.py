@@ -22,19 +22,12 @@ import gltf_make  # noqa: E402
 import hand_forward as hf  # noqa: E402
 import hand_make_mano as hm  # noqa: E402
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = os.path.abspath(sys.argv[1])
 ASSETS = os.path.join(ROOT, "node_modules", "@webxr-input-profiles", "assets", "dist", "profiles", "generic-hand")
 TOL = 1e-9
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args, cwd=None, env=None):
@@ -296,8 +289,7 @@ def main():
         glb = glb_cases(tmp, rng)
         default_cases(tmp)
         error_cases(tmp, glb)
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 if __name__ == "__main__":

@@ -17,18 +17,11 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "ref"))
 import metrics_np as M  # noqa: E402
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = sys.argv[1]
 RTOL = 1e-9
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, detail)
 
 
 def run(*args):
@@ -145,8 +138,7 @@ def main():
         for i, T in enumerate([5, 100, 257]):
             hands_case(rng, tmp, T, "hands%d" % i, compressed=bool(i % 2), with_valid=i > 0)
         error_cases(tmp)
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 main()

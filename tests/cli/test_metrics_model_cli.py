@@ -21,18 +21,11 @@ sys.path.insert(0, os.path.join(HERE, "..", "ref"))
 import hand_forward as hf  # noqa: E402
 import hand_make_mano as hm  # noqa: E402
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = os.path.abspath(sys.argv[1])
 KEYS = ("pa_mpjpe", "auc", "w_mpjpe", "wa_mpjpe", "rte", "accel", "n")
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args):
@@ -175,8 +168,7 @@ def main():
         expect("bad side", P("gt_j"), P("est_j"), ("--side", "middle"), 2, "--side")
         rc, so, se = run("metrics", "hands", "--help")
         check("help", rc == 0 and "cam_rot" in so and "hand_pose" in so and "--model" in so, so)
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 if __name__ == "__main__":

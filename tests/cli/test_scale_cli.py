@@ -18,17 +18,10 @@ import tempfile
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = os.path.abspath(sys.argv[1])
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args):
@@ -50,8 +43,6 @@ def main():
     rng = np.random.default_rng(3)
     tmp = tempfile.mkdtemp(prefix="hawor_scale_cli_")
     T, fps, W, H = 240, 30.0, 80, 60
-    fx = fy = 70.0
-    cx, cy = W / 2, H / 2
     alpha = 0.42                      # metres per map unit: the scale to recover
     t = np.arange(T) / fps
     # Camera: walks 0.3 m/s along x with a bob, looks along +z (world), small yaw.
@@ -132,7 +123,6 @@ def main():
         j = json.loads(so)
         check("hands: method/cue", j["method"] == "hands" and j["hand_cue"] == "holds", so)
         check("hands: scale within 2 %", abs(j["scale"] / alpha - 1) < 0.02, so)
-        hs, hc = j["scale"], j["confidence"]
 
     # Both: fused in log space by confidence.
     rc, so, se = run("scale", "--traj", traj, "--keyframe-depths", kd, "--metric-depth", ddir, "--masks", mdir,
@@ -180,8 +170,7 @@ def main():
                      "--out", out)
     check("NaN depth + hands: hands answer", rc == 0 and json.loads(so)["method"] == "hands", so + se)
 
-    print("%d passed, %d failed" % (passed, failed))
-    return 1 if failed else 0
+    return cliutil.finish()
 
 
 if __name__ == "__main__":

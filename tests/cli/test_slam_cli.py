@@ -15,17 +15,10 @@ import tempfile
 
 import numpy as np
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HAWOR = os.path.abspath(sys.argv[1])
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args):
@@ -145,8 +138,7 @@ def main():
         check("mask size mismatch", rc == 1 and "mask" in err and "000001.png" in err, err)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print("%d passed, %d failed" % (passed, failed))
-    return 1 if failed else 0
+    return cliutil.finish()
 
 
 if __name__ == "__main__":

@@ -16,21 +16,14 @@ import zlib
 
 import numpy as np
 
+import cliutil  # noqa: E402  (tests/cli: check, finish)
+from cliutil import check  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 HAWOR = os.path.abspath(sys.argv[1])
 PRESETS = ["walk", "table_work", "fast_turns", "pure_rotation", "hands_cover"]
 T, W, H = 10, 320, 240
-passed = failed = 0
-
-
-def check(name, ok, detail=""):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL:", name, str(detail)[:2000])
 
 
 def run(*args, cwd=None):
@@ -272,8 +265,7 @@ def main():
         open(blocker, "w").write("x")
         rc, so, se = run(*base, "--out", os.path.join(blocker, "sub"))
         check("unwritable out", rc == 1 and "file" in se, (rc, se))
-    print("%d passed, %d failed" % (passed, failed))
-    sys.exit(1 if failed else 0)
+    sys.exit(cliutil.finish())
 
 
 if __name__ == "__main__":
