@@ -25,15 +25,6 @@
 
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * double(v.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(pos);
-  const double a = pos - double(i);
-  return i + 1 < v.size() ? v[i] * (1 - a) + v[i + 1] * a : v[i];
-}
-
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
   std::string cur;
@@ -163,8 +154,8 @@ int main(int argc, char** argv) {
         st.ateM = hawor::ateSim3(hawor::cameraPositions(gt), hawor::cameraPositions(est)) / 1000.0;
         st.pathM = path;
         st.atePct = path > 0 ? 100.0 * st.ateM / path : 0;
-        st.msMedian = percentile(m == 0 ? tm : tu, 0.5);
-        st.msP95 = percentile(m == 0 ? tm : tu, 0.95);
+        st.msMedian = hawor::percentile(m == 0 ? tm : tu, 0.5);
+        st.msP95 = hawor::percentile(m == 0 ? tm : tu, 0.95);
         st.finishMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
         st.keyframes = r.numKeyframes;
         st.losses = r.numLosses;

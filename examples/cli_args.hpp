@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hawor/common.hpp"
+#include "hawor/io/json.hpp"
 
 namespace hawor_cli {
 
@@ -135,22 +136,7 @@ class JsonObject {
     for (size_t i = 0; i < items_.size(); ++i) s += (i ? ", " : "") + items_[i];
     return s + "}";
   }
-  static std::string quote(const std::string& s) {
-    std::string o = "\"";
-    for (char c : s) {
-      if (c == '"' || c == '\\') {
-        o += '\\';
-        o += c;
-      } else if (static_cast<unsigned char>(c) < 0x20) {
-        char buf[8];
-        std::snprintf(buf, sizeof buf, "\\u%04x", c);
-        o += buf;
-      } else {
-        o += c;
-      }
-    }
-    return o + "\"";
-  }
+  static std::string quote(const std::string& s) { return hawor::jsonQuote(s); }
 
  private:
   std::vector<std::string> items_;

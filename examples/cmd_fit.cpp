@@ -50,13 +50,6 @@ const char* kFitHelpTail =
     "Prints one JSON object: model, kind, side, frames, fitted, skipped (valid = 0), failed\n"
     "(the fit threw: see stderr), median_reproj_rms_px and median_ms_per_frame over fitted frames.\n";
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /// An optional (T,K,...) float array of the observations, checked against its shape.
 std::vector<double> readObsArray(const hawor::Npz& z, const std::string& key, const std::vector<size_t>& shape) {
   if (!z.has(key)) return {};
@@ -232,8 +225,8 @@ int cmdFit(int argc, char** argv) {
                           .integer("fitted", static_cast<long long>(nFitted))
                           .integer("skipped", static_cast<long long>(skipped))
                           .integer("failed", static_cast<long long>(failed))
-                          .num("median_reproj_rms_px", median(rmsFitted))
-                          .num("median_ms_per_frame", median(msPerFrame))
+                          .num("median_reproj_rms_px", hawor::median(rmsFitted))
+                          .num("median_ms_per_frame", hawor::median(msPerFrame))
                           .dump()
                           .c_str());
   return 0;

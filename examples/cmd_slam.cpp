@@ -65,15 +65,6 @@ bool fileExists(const std::string& p) {
   return true;
 }
 
-double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * double(v.size() - 1);
-  const std::size_t i = static_cast<std::size_t>(pos);
-  const double a = pos - double(i);
-  return i + 1 < v.size() ? v[i] * (1 - a) + v[i + 1] * a : v[i];
-}
-
 }  // namespace
 
 int cmdSlam(int argc, char** argv) {
@@ -184,8 +175,8 @@ int cmdSlam(int argc, char** argv) {
       .integer("resets", r.numResets)
       .raw("initialised", r.initialised ? "true" : "false")
       .raw("masked", useMasks ? "true" : "false")
-      .num("median_ms_per_frame", pct(ms, 0.5))
-      .num("p95_ms_per_frame", pct(ms, 0.95));
+      .num("median_ms_per_frame", hawor::percentile(ms, 0.5))
+      .num("p95_ms_per_frame", hawor::percentile(ms, 0.95));
   if (args.has("stats")) {
     std::string s = "{\"summary\": " + j.dump() + ", \"status\": [";
     for (std::size_t i = 0; i < r.status.size(); ++i) s += std::string(i ? ", " : "") + "\"" + hawor::slamStatusName(r.status[i]) + "\"";

@@ -107,13 +107,6 @@ void loadHands(const Args& args, const char* argv0, hawor::HandModel<double>& le
   }
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
-}
-
 }  // namespace
 
 int cmdSynth(int argc, char** argv) {
@@ -182,9 +175,9 @@ int cmdSynth(int argc, char** argv) {
       .integer("frames_coverage_20", sum.framesCovered20)
       .integer("valid_left", sum.validFrames[0])
       .integer("valid_right", sum.validFrames[1])
-      .num("render_ms_median", percentile(sum.renderMs, 0.5))
-      .num("render_ms_p95", percentile(sum.renderMs, 0.95))
-      .num("write_ms_median", percentile(sum.writeMs, 0.5))
+      .num("render_ms_median", hawor::percentile(sum.renderMs, 0.5))
+      .num("render_ms_p95", hawor::percentile(sum.renderMs, 0.95))
+      .num("write_ms_median", hawor::percentile(sum.writeMs, 0.5))
       .str("out", out);
   std::printf("%s\n", j.dump().c_str());
   return 0;

@@ -7,10 +7,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace hawor {
 
@@ -65,6 +68,29 @@ using Points3 = Eigen::Matrix<Scalar, Eigen::Dynamic, 3, Eigen::RowMajor>;
 template <typename Derived>
 bool allFinite(const Eigen::MatrixBase<Derived>& m) {
   return m.allFinite();
+}
+
+/// Median of the values (mean of the two middle ones for an even count); NaN when empty.
+template <typename Scalar>
+Scalar median(std::vector<Scalar> v) {
+  if (v.empty()) return std::numeric_limits<Scalar>::quiet_NaN();
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
+  if (v.size() % 2) return v[m];
+  const Scalar hi = v[m];
+  const Scalar lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m));
+  return Scalar(0.5) * (lo + hi);
+}
+
+/// The q-quantile (q in [0, 1]) with linear interpolation between order statistics (numpy's
+/// default); 0 when empty (timing summaries).
+inline double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = std::min(std::max(q, 0.0), 1.0) * double(v.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(pos);
+  const double a = pos - double(i);
+  return i + 1 < v.size() ? v[i] * (1 - a) + v[i + 1] * a : v[i];
 }
 
 }  // namespace hawor

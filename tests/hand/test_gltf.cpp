@@ -65,6 +65,19 @@ TEST_CASE("json: values, escapes and numbers", "[gltf][json]") {
   CHECK(hawor::parseJson("[]").items("").empty());
 }
 
+TEST_CASE("json: jsonQuote writes literals that parse back to the same bytes", "[gltf][json]") {
+  const std::vector<std::string> samples = {"", "plain", "a \"quoted\" word", "back\\slash", std::string("nul\0in", 6),
+                                            "tab\tnew\nline\r\x01\x1f", "caf\xc3\xa9 \xe2\x9c\x93", "/slash/"};
+  for (const std::string& s : samples) {
+    const std::string lit = hawor::jsonQuote(s);
+    INFO(lit);
+    CHECK(lit.front() == '"');
+    CHECK(lit.back() == '"');
+    for (char c : lit) CHECK(static_cast<unsigned char>(c) >= 0x20);  // no raw control character
+    CHECK(hawor::parseJson(lit).asString("sample") == s);
+  }
+}
+
 TEST_CASE("json: malformed documents are errors", "[gltf][json]") {
   const char* bad[] = {"",         "  ",        "{",           "[1,]",       "[1 2]",      "{\"a\" 1}",  "{\"a\":1,}",
                        "{a:1}",    "01",        "1.",          ".5",         "-",          "1e",         "+1",

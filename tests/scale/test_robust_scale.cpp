@@ -3,6 +3,7 @@
 // the adaptive window against the plain median, and degenerate input.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -171,4 +172,24 @@ TEST_CASE("AdaSM: widening per keyframe, degenerate input never gives a NaN scal
   CHECK_THROWS_AS(hawor::adaptiveKeyframeScale(d, shorter, nullptr, opt), hawor::Error);
   opt.farM = 0.3;
   CHECK_THROWS_AS(hawor::adaptiveKeyframeScale(d, D, nullptr, opt), hawor::Error);
+}
+
+TEST_CASE("common median and percentile: order statistics of shuffled data", "[scale]") {
+  std::mt19937 rng(4);
+  for (int n : {1, 2, 3, 10, 11}) {
+    std::vector<double> v(n);
+    for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = double(i * i);  // sorted: i²
+    std::shuffle(v.begin(), v.end(), rng);
+    const double med = n % 2 ? double((n / 2) * (n / 2)) : 0.5 * double((n / 2 - 1) * (n / 2 - 1) + (n / 2) * (n / 2));
+    CHECK(hawor::median(v) == med);
+    CHECK(hawor::percentile(v, 0.0) == 0.0);
+    CHECK(hawor::percentile(v, 1.0) == double((n - 1) * (n - 1)));
+    // q = 0.25: position 0.25·(n−1) between i² and (i+1)².
+    const double pos = 0.25 * (n - 1);
+    const int i = static_cast<int>(pos);
+    const double expect = i + 1 < n ? i * i + (pos - i) * ((i + 1) * (i + 1) - i * i) : double(i * i);
+    CHECK(hawor::percentile(v, 0.25) == Approx(expect));
+  }
+  CHECK(std::isnan(hawor::median(std::vector<float>{})));
+  CHECK(hawor::percentile({}, 0.5) == 0.0);
 }

@@ -9,12 +9,15 @@
 //   * strings: escapes decoded to UTF-8 (surrogate pairs joined, lone surrogates refused), raw
 //     control characters refused, other bytes passed through;
 //   * duplicate keys in one object are refused (glTF requires unique keys).
+// Writing: jsonQuote() makes a JSON string literal (the writers of the CLI and the synthetic
+// generator build their small documents with it).
 // Thread-safety: a JsonValue is a plain value; parseJson has no shared state.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <locale>
 #include <sstream>
 #include <string>
@@ -23,6 +26,25 @@
 #include "../common.hpp"
 
 namespace hawor {
+
+/// A JSON string literal for s: quotes, backslash escapes for '"' and '\\', \\u00XX for control
+/// characters; other bytes (UTF-8) pass through.
+inline std::string jsonQuote(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      o += b;
+    } else {
+      o += c;
+    }
+  }
+  return o + "\"";
+}
 
 /// Resource limits of parseJson.
 struct JsonLimits {

@@ -124,17 +124,6 @@ struct KeyframeScale {
 namespace scale_detail {
 
 template <typename Scalar>
-Scalar median(std::vector<Scalar> v) {
-  if (v.empty()) return std::numeric_limits<Scalar>::quiet_NaN();
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
-  if (v.size() % 2) return v[m];
-  const Scalar hi = v[m];
-  const Scalar lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m));
-  return Scalar(0.5) * (lo + hi);
-}
-
-template <typename Scalar>
 bool usable(Scalar d, Scalar D, const std::vector<char>* masked, std::size_t i) {
   return std::isfinite(double(d)) && std::isfinite(double(D)) && d > Scalar(0) && D > Scalar(0) &&
          !(masked && (*masked)[i]);
@@ -149,7 +138,7 @@ template <typename Scalar>
 KeyframeScale<Scalar> adaptiveKeyframeScale(const std::vector<Scalar>& slamDepth, const std::vector<Scalar>& metricDepth,
                                             const std::vector<char>* masked = nullptr,
                                             const AdaptiveScaleOptions<Scalar>& opt = {}) {
-  using scale_detail::median;
+  using hawor::median;
   if (slamDepth.size() != metricDepth.size() || (masked && masked->size() != slamDepth.size())) {
     throw Error("adaptiveKeyframeScale: SLAM depths, metric depths and mask differ in length");
   }
@@ -275,7 +264,7 @@ SequenceScale<Scalar> medianScale(const std::vector<std::vector<Scalar>>& slamDe
         r.push_back(metricDepth[k][i] / slamDepth[k][i]);
       }
     }
-    out.perKeyframe.push_back(scale_detail::median(r));
+    out.perKeyframe.push_back(hawor::median(r));
   }
   scale_detail::summarise(out);
   return out;

@@ -109,7 +109,7 @@ struct TwoViewResult {
 namespace two_view_detail {
 
 template <typename Scalar>
-Scalar median(std::vector<Scalar>& v) {
+Scalar median(std::vector<Scalar>& v) {  // upper median, in place; 0 when empty (not hawor::median)
   if (v.empty()) return Scalar(0);
   const std::size_t m = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
@@ -394,7 +394,7 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
     return res;
   }
   auto& B = scores[static_cast<std::size_t>(best)];
-  res.medianParallaxDeg = median(B.parallaxDeg);
+  res.medianParallaxDeg = two_view_detail::median(B.parallaxDeg);
   if (res.medianParallaxDeg < opt.minParallaxDeg) {
     res.status = TwoViewStatus::NotEnoughParallax;
     const Mat3<Scalar> R = rotationFromRays(x1, x2, inl, Rc[best]);
@@ -491,7 +491,7 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
           par.push_back(triangulationQuality(Tid, T21, x1[k], x2[k], res.points[k]).parallaxDeg());
         }
       }
-      res.medianParallaxDeg = median(par);
+      res.medianParallaxDeg = two_view_detail::median(par);
     }
     if (!changed) break;
   }

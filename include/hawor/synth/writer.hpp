@@ -41,6 +41,7 @@
 
 #include "hawor/common.hpp"
 #include "hawor/geometry/rotation.hpp"
+#include "hawor/io/json.hpp"
 #include "hawor/io/npy.hpp"
 #include "hawor/io/npz.hpp"
 #include "hawor/io/tum.hpp"
@@ -95,23 +96,6 @@ inline std::string frameName(int i, const char* ext) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%06d.%s", i, ext);
   return buf;
-}
-
-inline std::string jsonQuote(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\u%04x", c);
-      o += b;
-    } else {
-      o += c;
-    }
-  }
-  return o + "\"";
 }
 
 inline double msSince(std::chrono::steady_clock::time_point t0) {
