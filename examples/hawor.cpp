@@ -33,6 +33,8 @@ const char* kUsage =
     "       [--masks DIR] --out TRAJ.tum            (camera trajectory, keyframe depths)\n"
     "  scale --traj TRAJ.tum --keyframe-depths KD.npz  metric scale of a SLAM trajectory from\n"
     "        [--metric-depth DIR] [--hands H.npz] --out M.tum  depth maps and/or the hands\n"
+    "  infill --in HANDS.npz --out FILLED.npz        fill the frames where a hand was unseen\n"
+    "         [--method last|lerp|spline|transformer] [--weights W.npz] [--smooth]\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -53,6 +55,7 @@ int main(int argc, char** argv) {
     if (cmd == "synth") return hawor_cli::cmdSynth(argc, argv);
     if (cmd == "slam") return hawor_cli::cmdSlam(argc, argv);
     if (cmd == "scale") return hawor_cli::cmdScale(argc, argv);
+    if (cmd == "infill") return hawor_cli::cmdInfill(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {

@@ -64,6 +64,28 @@ struct CanonicalFrame {
   Vec3<Scalar> t_can2w() const { return -(R_w2can.transpose() * t_w2can); }
 };
 
+/// The canonical frame (rule of canonicalFrame below) defined by frame `origin` of the sequence,
+/// valid or not (its values must be finite: e.g. a pre-filled frame of a window without valid
+/// frames). Throws if `origin` is out of range or not finite.
+template <typename Scalar>
+CanonicalFrame<Scalar> canonicalFrameAt(const HandMotion<Scalar>& world, const Points3<Scalar>& J0,
+                                        Eigen::Index origin) {
+  const Eigen::Index T = world.frames();
+  if (origin < 0 || origin >= T)
+    throw Error("canonicalFrameAt: frame " + std::to_string(origin) + " outside [0, " +
+                std::to_string(T) + ")");
+  if (!world.rot.row(origin).allFinite() || !world.trans.row(origin).allFinite())
+    throw Error("canonicalFrameAt: frame " + std::to_string(origin) + " is not finite");
+  CanonicalFrame<Scalar> c;
+  c.origin = origin;
+  const Vec3<Scalar> j0 = restRoot(J0, c.origin, T);
+  const Vec3<Scalar> a = world.rot.row(c.origin).transpose();
+  c.R_w2can = axisAngleToMatrix(a).transpose();
+  const Vec3<Scalar> root = world.trans.row(c.origin).transpose() + j0;
+  c.t_w2can = -(c.R_w2can * root) + j0;  // − offset = + J0
+  return c;
+}
+
 /// Canonical frame of a world-space hand sequence (official, DESIGN §7), from its first valid
 /// frame 0':
 ///   R_w2can = R_root(0')ᵀ,  t_w2can = −R_w2can·root(0') − offset(0'),  offset = −J0(0')
@@ -77,15 +99,7 @@ struct CanonicalFrame {
 template <typename Scalar>
 CanonicalFrame<Scalar> canonicalFrame(const HandMotion<Scalar>& world, const Points3<Scalar>& J0) {
   world.validate();
-  const Eigen::Index T = world.frames();
-  CanonicalFrame<Scalar> c;
-  c.origin = detail::firstValid(world.valid, "canonicalFrame");
-  const Vec3<Scalar> j0 = restRoot(J0, c.origin, T);
-  const Vec3<Scalar> a = world.rot.row(c.origin).transpose();
-  c.R_w2can = axisAngleToMatrix(a).transpose();
-  const Vec3<Scalar> root = world.trans.row(c.origin).transpose() + j0;
-  c.t_w2can = -(c.R_w2can * root) + j0;  // − offset = + J0
-  return c;
+  return canonicalFrameAt(world, J0, detail::firstValid(world.valid, "canonicalFrame"));
 }
 
 /// Applies a canonical frame's world → canonical transform to every frame of a world-space hand.

@@ -19,6 +19,9 @@ namespace hawor {
 ///   trans      T×3   MANO translation `transl` (joint 0 sits at trans + J0(β))
 ///   hand_pose  T×45  15 joint rotations, axis-angle, no PCA, no hands_mean (DESIGN §3)
 ///   betas      T×10  shape
+/// Other skinned hands with the same structure are accepted (zeros() makes MANO's sizes):
+/// hand_pose T×3K for K joint rotations (the default WebXR hand: K = 24) and betas T×B for any
+/// B ≥ 0 (the WebXR hand: B = 0).
 ///   valid      T     nonzero = observed frame; the content of missing frames is ignored by
 ///                    validate() and overwritten by the fills (it may be zeros or NaN).
 template <typename Scalar>
@@ -46,8 +49,8 @@ struct HandMotion {
     return m;
   }
 
-  /// Throws hawor::Error naming the field when shapes disagree or a valid frame holds a
-  /// non-finite value.
+  /// Throws hawor::Error naming the field when shapes disagree (row counts, 3 columns for rot and
+  /// trans, a multiple of 3 for hand_pose) or a valid frame holds a non-finite value.
   void validate() const {
     const Eigen::Index T = rot.rows();
     auto shape = [T](const Sequence<Scalar>& m, Eigen::Index cols, const char* name) {
@@ -58,8 +61,12 @@ struct HandMotion {
     };
     shape(rot, 3, "rot");
     shape(trans, 3, "trans");
-    shape(hand_pose, kPoseDim, "hand_pose");
-    shape(betas, kBetaDim, "betas");
+    if (hand_pose.cols() % 3 != 0)
+      throw Error("HandMotion: hand_pose has " + std::to_string(hand_pose.cols()) +
+                  " columns, not a multiple of 3 (axis-angle triples; MANO: " +
+                  std::to_string(kPoseDim) + ")");
+    shape(hand_pose, hand_pose.cols(), "hand_pose");
+    shape(betas, betas.cols(), "betas");
     checkMask(valid, T, "HandMotion");
     for (Eigen::Index t = 0; t < T; ++t) {
       if (!valid[static_cast<size_t>(t)]) continue;

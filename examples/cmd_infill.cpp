@@ -1,0 +1,290 @@
+// hawor infill — fills the frames where a hand was not observed (include/hawor/motion/infill.hpp).
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "cli_args.hpp"
+#include "cli_hand.hpp"
+#include "commands.hpp"
+#include "hawor/hand/forward.hpp"
+#include "hawor/hand/load_model.hpp"
+#include "hawor/hand/mirror.hpp"
+#include "hawor/io/npz.hpp"
+#include "hawor/motion/motion.hpp"
+
+namespace hawor_cli {
+namespace {
+
+const char* kInfillHelp =
+    "usage: hawor infill --in HANDS.npz --out FILLED.npz [--method last|lerp|spline|transformer]\n"
+    "                    [--weights W.npz] [--smooth] [--model FILE|default] [--joints]\n"
+    "\n"
+    "Fills the frames where a hand was not observed, per hand, in the hand's canonical space\n"
+    "(DESIGN section 7). HANDS.npz holds, per hand (key prefix left_ and/or right_), the world-space\n"
+    "keys of the original output:\n"
+    "  trans      (T,3)    MANO translation, metres\n"
+    "  rot        (T,3)    global orientation, axis-angle, radians\n"
+    "  hand_pose  (T,3K) or (T,K,3)  joint axis-angles (MANO: K = 15; the default WebXR hand: 24)\n"
+    "  betas      (T,B)    shape coefficients (MANO: B = 10; B may be 0)\n"
+    "  valid      (T,)     1 = observed (bool, integer or float 0/1)\n"
+    "Missing frames may hold anything (NaN included); observed frames must be finite. Both hands,\n"
+    "when present, have the same T.\n"
+    "\n"
+    "  --method M     spline (default): the data-free cubic Hermite / SO(3) spline with boundary\n"
+    "                 velocities from the visible frames; lerp: LERP/SLERP (the paper's baseline);\n"
+    "                 last: repeat the last observed frame; transformer: the original infiller\n"
+    "                 network with --weights (not available yet in this build)\n"
+    "  --weights W    the converted infiller weights (transformer only)\n"
+    "  --smooth       first smooth the observed frames lightly (each frame moves by at most\n"
+    "                 3 noise sigmas, 1 cm, 0.05 rad); without it observed frames are copied bit\n"
+    "                 for bit\n"
+    "  --model M      a hand model (as for 'hawor hand'; FILE is mirrored for the other side,\n"
+    "                 'default' = the shipped WebXR hands): joint 0 of the shaped rest hand (J0)\n"
+    "                 then places the canonical frame exactly (DESIGN section 3); without it J0 = 0,\n"
+    "                 which changes nothing for last/lerp/spline (they commute with rigid motions)\n"
+    "  --joints       also write <prefix>joints_world (T,K,3), the model's keypoints of the output\n"
+    "                 parameters (needs --model; NaN where a frame stays unfilled)\n"
+    "\n"
+    "Writes FILLED.npz: per hand trans, rot, hand_pose (input layout), betas as float64 with the\n"
+    "missing frames filled, valid as given, and <prefix>filled (T,) bool marking the filled\n"
+    "frames; keys without a hand prefix are copied; other per-hand keys of the input (joints,\n"
+    "camera-space copies, ...) describe the unfilled input and are not written. A hand with no\n"
+    "observed frame is written unchanged with nothing filled (a note on stderr); one observed\n"
+    "frame is held everywhere; a fully observed hand is unchanged. Prints one JSON object: method,\n"
+    "smooth, per hand {frames, valid, filled}, out.\n";
+
+const char* const kInfillSides[2] = {"left", "right"};
+
+/// One hand's arrays as read from the file, and how to write them back.
+struct InfillHandIn {
+  bool present = false;
+  hawor::HandMotion<double> motion;
+  std::vector<size_t> poseShape;  ///< hand_pose as stored: (T,3K) or (T,K,3)
+  hawor::NpyArray validArray;     ///< valid as stored (written back unchanged)
+};
+
+/// Rows of a (T,C) array (C = `cols`, or any when cols < 0) as a Sequence; names file and key.
+hawor::Sequence<double> infillReadRows(const hawor::Npz& z, const std::string& key, size_t T, long cols,
+                                       const std::string& expected) {
+  const hawor::NpyArray& a = z.get(key);
+  if (a.shape.size() != 2 || a.shape[0] != T || (cols >= 0 && a.shape[1] != static_cast<size_t>(cols)))
+    throw hawor::Error(z.source() + ": '" + key + "' has shape " + hawor::shapeString(a.shape) + ", expected " +
+                       expected);
+  const std::vector<double> v = z.getAs<double>(key);
+  hawor::Sequence<double> s(static_cast<Eigen::Index>(a.shape[0]), static_cast<Eigen::Index>(a.shape[1]));
+  if (!v.empty()) std::copy(v.begin(), v.end(), s.data());
+  return s;
+}
+
+/// The five keys of hand `side` ("left"/"right"); absent hand when none of them is present.
+InfillHandIn infillReadHand(const hawor::Npz& z, const std::string& side) {
+  const std::string p = side + "_";
+  InfillHandIn h;
+  const char* keys[5] = {"trans", "rot", "hand_pose", "betas", "valid"};
+  std::string missing;
+  for (const char* k : keys) {
+    if (z.has(p + k))
+      h.present = true;
+    else
+      missing += (missing.empty() ? "'" : ", '") + p + k + "'";
+  }
+  if (!h.present) return h;
+  if (!missing.empty())
+    throw hawor::Error(z.source() + ": the " + side + " hand lacks " + missing +
+                       " (a hand needs trans, rot, hand_pose, betas and valid)");
+  const hawor::NpyArray& va = z.get(p + "valid");
+  if (va.shape.size() != 1)
+    throw hawor::Error(z.source() + ": '" + p + "valid' must have shape (T,), got " + hawor::shapeString(va.shape));
+  const size_t T = va.shape[0];
+  h.validArray = va;
+  const std::vector<double> v = z.getAs<double>(p + "valid");
+  h.motion.valid.resize(T);
+  for (size_t i = 0; i < T; ++i) {
+    if (v[i] != 0 && v[i] != 1)
+      throw hawor::Error(z.source() + ": '" + p + "valid' must hold 0/1, frame " + std::to_string(i) + " holds " +
+                         std::to_string(v[i]));
+    h.motion.valid[i] = v[i] != 0;
+  }
+  const std::string Ts = std::to_string(T);
+  h.motion.trans = infillReadRows(z, p + "trans", T, 3, "(" + Ts + ",3)");
+  h.motion.rot = infillReadRows(z, p + "rot", T, 3, "(" + Ts + ",3)");
+  h.motion.betas = infillReadRows(z, p + "betas", T, -1, "(" + Ts + ",B)");
+  const hawor::NpyArray& pa = z.get(p + "hand_pose");
+  h.poseShape = pa.shape;
+  if (pa.shape.size() == 3 && pa.shape[0] == T && pa.shape[2] == 3) {
+    const std::vector<double> pv = z.getAs<double>(p + "hand_pose");
+    h.motion.hand_pose.resize(static_cast<Eigen::Index>(T), static_cast<Eigen::Index>(3 * pa.shape[1]));
+    if (!pv.empty()) std::copy(pv.begin(), pv.end(), h.motion.hand_pose.data());
+  } else {
+    if (pa.shape.size() != 2 || pa.shape[0] != T || pa.shape[1] % 3 != 0)
+      throw hawor::Error(z.source() + ": '" + p + "hand_pose' has shape " + hawor::shapeString(pa.shape) +
+                         ", expected (" + Ts + ",3K) or (" + Ts + ",K,3) (MANO: K = 15)");
+    h.motion.hand_pose = infillReadRows(z, p + "hand_pose", T, -1, "");
+  }
+  try {
+    h.motion.validate();
+  } catch (const hawor::Error& e) {
+    throw hawor::Error(z.source() + ": " + side + " hand: " + std::string(e.what()).substr(7));  // drop "hawor: "
+  }
+  return h;
+}
+
+/// Left and right models of --model (FILE: mirrored for the other side; default: both shipped).
+void infillLoadModels(const Args& args, const char* argv0, std::array<hawor::HandModel<double>, 2>& models) {
+  const std::string m = args.required("model");
+  if (m == "default") {
+    const std::vector<std::string> dirs = defaultModelDirs(argv0);
+    models[1] = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Right, dirs),
+                                                hawor::HandSide::Right).model;
+    try {
+      models[0] = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Left, dirs),
+                                                  hawor::HandSide::Left).model;
+    } catch (const hawor::Error&) {
+      models[0] = hawor::mirrorHandModel(models[1]);
+    }
+    return;
+  }
+  hawor::LoadedHandModel<double> h = hawor::loadAnyHandModel<double>(m, hawor::HandSide::Auto);
+  const int side = h.model.isLeft ? 0 : 1;
+  models[static_cast<size_t>(1 - side)] = hawor::mirrorHandModel(h.model);
+  models[static_cast<size_t>(side)] = std::move(h.model);
+}
+
+/// J0(β_t) per frame (joint 0 of the shaped rest hand) for betas that are finite everywhere.
+hawor::Points3<double> infillRestRoot(const hawor::HandModel<double>& model, const hawor::Sequence<double>& betas,
+                                      const std::string& what) {
+  if (betas.cols() > model.numBetas())
+    throw hawor::Error(what + ": " + std::to_string(betas.cols()) + " betas, the --model has " +
+                       std::to_string(model.numBetas()));
+  hawor::Points3<double> J0(betas.rows(), 3);
+  hawor::HandWorkspace<double> ws;
+  for (Eigen::Index t = 0; t < betas.rows(); ++t) {
+    const hawor::VecX<double> b = betas.row(t).transpose();
+    hawor::shapeHand(model, b, ws);
+    J0.row(t) = ws.jRest.row(0);
+  }
+  return J0;
+}
+
+/// (T,K,3) keypoints of every frame whose parameters are finite (NaN elsewhere).
+hawor::NpyArray infillJoints(const hawor::HandModel<double>& model, const hawor::HandMotion<double>& m,
+                             const std::string& what) {
+  const Eigen::Index J1 = model.numJoints() - 1, K = model.numKeypoints();
+  if (m.hand_pose.cols() != 3 * J1)
+    throw hawor::Error(what + ": hand_pose has " + std::to_string(m.hand_pose.cols() / 3) +
+                       " joint rotations, the --model has " + std::to_string(J1) + " (--joints)");
+  if (K == 0) throw hawor::Error("--joints: the --model has no keypoints");
+  const Eigen::Index T = m.frames();
+  std::vector<double> out(static_cast<size_t>(T * K * 3), std::numeric_limits<double>::quiet_NaN());
+  hawor::HandWorkspace<double> ws;
+  hawor::HandOutput<double> o;
+  hawor::HandPose<double> pose = hawor::HandPose<double>::zero(model);
+  for (Eigen::Index t = 0; t < T; ++t) {
+    if (!m.rot.row(t).allFinite() || !m.trans.row(t).allFinite() || !m.hand_pose.row(t).allFinite() ||
+        !m.betas.row(t).allFinite())
+      continue;
+    pose.globalOrient = m.rot.row(t).transpose();
+    pose.transl = m.trans.row(t).transpose();
+    for (Eigen::Index j = 0; j < J1; ++j) pose.jointPose.row(j) = m.hand_pose.row(t).segment(3 * j, 3);
+    pose.betas = m.betas.row(t).transpose();
+    hawor::forward(model, pose, ws, o);
+    std::copy(o.keypoints.data(), o.keypoints.data() + 3 * K, out.begin() + t * K * 3);
+  }
+  return hawor::NpyArray::fromData(out.data(), {static_cast<size_t>(T), static_cast<size_t>(K), 3});
+}
+
+hawor::NpyArray infillRowsArray(const hawor::Sequence<double>& s, const std::vector<size_t>& shape) {
+  return hawor::NpyArray::fromData(s.data(), shape);
+}
+
+}  // namespace
+
+int cmdInfill(int argc, char** argv) {
+  Args args(argc, argv, 2, {"in", "out", "method", "weights", "model"}, {"smooth", "joints"});
+  if (args.help()) {
+    std::fputs(kInfillHelp, stdout);
+    return 0;
+  }
+  if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
+  const std::string in = args.required("in"), out = args.required("out");
+  const std::string method = args.get("method", "spline");
+  if (method != "last" && method != "lerp" && method != "spline" && method != "transformer")
+    throw UsageError("--method must be last, lerp, spline or transformer, got '" + method + "'");
+  if (args.has("weights") && method != "transformer")
+    throw UsageError("--weights is only used by --method transformer");
+  if (args.flag("joints") && !args.has("model")) throw UsageError("--joints needs --model FILE|default");
+  if (method == "transformer") {
+    if (!args.has("weights")) throw UsageError("--method transformer needs --weights W.npz");
+    throw hawor::Error("infill: --method transformer is not available yet in this build (use spline, the "
+                       "data-free default)");
+  }
+  hawor::InfillOptions<double> options;
+  options.method = hawor::parseInfillMethod(method);
+
+  const hawor::Npz z = hawor::Npz::read(in);
+  std::array<InfillHandIn, 2> hands = {infillReadHand(z, "left"), infillReadHand(z, "right")};
+  if (!hands[0].present && !hands[1].present)
+    throw hawor::Error(in + ": no hand found (expected left_* and/or right_* keys: trans, rot, hand_pose, betas, "
+                       "valid)");
+  if (hands[0].present && hands[1].present && hands[0].motion.frames() != hands[1].motion.frames())
+    throw hawor::Error(in + ": the left hand has " + std::to_string(hands[0].motion.frames()) +
+                       " frames, the right hand " + std::to_string(hands[1].motion.frames()));
+  std::array<hawor::HandModel<double>, 2> models;
+  const bool withModel = args.has("model");
+  if (withModel) infillLoadModels(args, argv[0], models);
+
+  hawor::Npz outz;
+  for (const std::string& name : z.names())
+    if (name.rfind("left_", 0) != 0 && name.rfind("right_", 0) != 0) outz.set(name, z.get(name));
+  JsonObject summary;
+  summary.str("method", method).raw("smooth", args.flag("smooth") ? "true" : "false");
+  for (size_t s = 0; s < 2; ++s) {
+    if (!hands[s].present) continue;
+    const std::string side = kInfillSides[s], p = side + "_";
+    hawor::HandMotion<double> m = hands[s].motion;
+    const Eigen::Index T = m.frames();
+    const Eigen::Index nvalid = hawor::countValid(m.valid);
+    // --smooth: the gap filler keeps the noise levels of the raw observations (smoothing hides
+    // the noise from its estimate, not from the boundary velocities).
+    hawor::HandNoise<double> noise;
+    const bool smooth = args.flag("smooth") && nvalid > 0;
+    if (smooth) {
+      noise = hawor::estimateHandNoise(m);
+      m = hawor::smoothObserved(m);
+    }
+    hawor::Points3<double> J0 = hawor::Points3<double>::Zero(1, 3);
+    if (withModel && nvalid > 0) {
+      // J0 of every frame from its (pre-filled, hence finite) betas.
+      J0 = infillRestRoot(models[s], hawor::fillLinear(m.betas, m.valid), in + ": " + side + " hand");
+    }
+    const hawor::InfillResult<double> r = hawor::infillHand(m, J0, options, smooth ? &noise : nullptr);
+    if (nvalid == 0)
+      std::fprintf(stderr, "hawor infill: %s hand: no observed frame, written unchanged (nothing filled)\n",
+                   side.c_str());
+    const size_t Tn = static_cast<size_t>(T);
+    outz.set(p + "trans", infillRowsArray(r.motion.trans, {Tn, 3}));
+    outz.set(p + "rot", infillRowsArray(r.motion.rot, {Tn, 3}));
+    outz.set(p + "hand_pose", infillRowsArray(r.motion.hand_pose, hands[s].poseShape));
+    outz.set(p + "betas", infillRowsArray(r.motion.betas, {Tn, static_cast<size_t>(r.motion.betas.cols())}));
+    outz.set(p + "valid", hands[s].validArray);
+    hawor::NpyArray filled = hawor::NpyArray::fromData(r.filled.data(), {Tn});
+    filled.dtype = "|b1";
+    outz.set(p + "filled", filled);
+    if (args.flag("joints"))
+      outz.set(p + "joints_world", infillJoints(models[s], r.motion, in + ": " + side + " hand"));
+    summary.raw(side, JsonObject()
+                          .integer("frames", static_cast<long long>(T))
+                          .integer("valid", static_cast<long long>(nvalid))
+                          .integer("filled", static_cast<long long>(hawor::countValid(r.filled)))
+                          .dump());
+  }
+  outz.write(out);
+  summary.str("out", out);
+  std::printf("%s\n", summary.dump().c_str());
+  return 0;
+}
+
+}  // namespace hawor_cli
