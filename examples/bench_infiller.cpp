@@ -1,13 +1,16 @@
 // bench_infiller — time of one forward pass of the infiller network (motion/infiller_net.hpp):
-// one 120-frame, two-hand window at the official sizes, float and double, one thread.
+// one 120-frame, two-hand window at the official sizes, float and double, on 1 and 2 threads
+// (hawor::ThreadPool: the window's frames split between the threads) in the same run.
 //
-//   bench_infiller [--repeats N] [--weights W.npz] [--all-backends]
+//   bench_infiller [--repeats N] [--weights W.npz] [--all-backends] [--threads 1,2]
 //
 // Without --weights the network has random weights (the speed does not depend on them). The
 // default matrix-product backend is Eigen natively and the packed SIMD kernel in WebAssembly;
 // --all-backends times the other one too (Eigen in WebAssembly takes seconds per window).
-// Prints the median wall and CPU time per window over N timed runs (after two warm-up runs),
-// the arithmetic rate, and (natively, glibc) the heap allocations per forward pass.
+// Prints the median wall and CPU time (all threads) per window over N timed runs (after two
+// warm-up runs), the arithmetic rate per wall second, and (natively, glibc) the heap allocations
+// per forward pass. Where the build has no threads (WebAssembly without -pthread) a pool of any
+// size runs on one thread, and the line says so.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -57,11 +60,12 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
-// CPU time of this thread in ms (wall time where there is no thread clock, as in WebAssembly).
+// CPU time of the process in ms, every thread (wall time where there is no CPU clock, as in
+// WebAssembly).
 double cpuMs() {
-#if defined(CLOCK_THREAD_CPUTIME_ID) && !defined(__EMSCRIPTEN__)
+#if defined(CLOCK_PROCESS_CPUTIME_ID) && !defined(__EMSCRIPTEN__)
   timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return 1e3 * double(ts.tv_sec) + 1e-6 * double(ts.tv_nsec);
 #else
   return std::chrono::duration<double, std::milli>(
@@ -103,7 +107,7 @@ const char* backendName(hawor::MatmulBackend b) {
 }
 
 template <typename Scalar>
-void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats) {
+void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats, int threads) {
   const hawor::InfillerConfig c;
   const hawor::InfillerNet<Scalar> net(hawor::loadInfillerWeights<Scalar>(npz, c), backend);
   std::mt19937 rng(2);
@@ -113,9 +117,10 @@ void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats) {
   hawor::ValidMask valid(static_cast<size_t>(c.window), 1);
   for (int t = 30; t < 60; ++t) valid[static_cast<size_t>(t)] = 0;  // a 30-frame gap
   for (int t = 100; t < 112; ++t) valid[static_cast<size_t>(t)] = 0;
-  hawor::InfillerWorkspace<Scalar> ws(c);
-  net.forward(x, valid, y, ws);  // warm-up: sizes y, pages in the weights, tiers up wasm code
-  net.forward(x, valid, y, ws);
+  hawor::ThreadPool pool(threads);
+  hawor::InfillerWorkspace<Scalar> ws(c, pool.size());
+  net.forward(x, valid, y, ws, &pool);  // warm-up: sizes y, pages in the weights, tiers up wasm
+  net.forward(x, valid, y, ws, &pool);
   std::vector<double> wall, cpu;
   wall.reserve(static_cast<size_t>(repeats));
   cpu.reserve(static_cast<size_t>(repeats));
@@ -124,7 +129,7 @@ void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats) {
   for (int r = 0; r < repeats; ++r) {
     const double c0 = cpuMs();
     const auto t0 = std::chrono::steady_clock::now();
-    net.forward(x, valid, y, ws);
+    net.forward(x, valid, y, ws, &pool);
     const auto t1 = std::chrono::steady_clock::now();
     cpu.push_back(cpuMs() - c0);
     wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
@@ -135,10 +140,11 @@ void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats) {
   std::sort(cpu.begin(), cpu.end());
   const double medWall = wall[wall.size() / 2], medCpu = cpu[cpu.size() / 2];
   std::printf(
-      "infiller forward, %d frames x %d features: %-6s %-6s median %8.1f ms (cpu %8.1f, "
-      "min %8.1f)  %5.1f GFLOP/s  allocations/forward %s%s\n",
-      c.window, c.features, sizeof(Scalar) == 4 ? "float" : "double", backendName(backend), medWall,
-      medCpu, wall.front(), forwardFlops(c, c.window) / medCpu * 1e-6,
+      "infiller forward, %d frames x %d features: %-6s %-6s %d thread%s%s median %8.1f ms (cpu "
+      "%8.1f, min %8.1f)  %5.1f GFLOP/s  allocations/forward %s%s\n",
+      c.window, c.features, sizeof(Scalar) == 4 ? "float" : "double", backendName(backend),
+      pool.size(), pool.size() == 1 ? " " : "s", pool.size() < threads ? " (no threads here)" : "",
+      medWall, medCpu, wall.front(), forwardFlops(c, c.window) / medWall * 1e-6,
 #ifdef HAWOR_BENCH_COUNTS_MALLOC
       std::to_string(allocations).substr(0, 4).c_str(),
 #else
@@ -159,6 +165,7 @@ int main(int argc, char** argv) {
 #endif
     std::string weights;
     bool all = false;
+    std::vector<int> threadCounts{1, 2};
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--repeats" && i + 1 < argc) {
@@ -167,9 +174,22 @@ int main(int argc, char** argv) {
         weights = argv[++i];
       } else if (a == "--all-backends") {
         all = true;
+      } else if (a == "--threads" && i + 1 < argc) {
+        threadCounts.clear();
+        for (const char* p = argv[++i]; *p;) {
+          char* end = nullptr;
+          const long n = std::strtol(p, &end, 10);
+          if (end == p || n < 1 || n > 64) {
+            std::fprintf(stderr, "bench_infiller: --threads wants counts like 1,2\n");
+            return 2;
+          }
+          threadCounts.push_back(static_cast<int>(n));
+          p = *end == ',' ? end + 1 : end;
+        }
       } else {
         std::fprintf(stderr,
-                     "usage: bench_infiller [--repeats N] [--weights W.npz] [--all-backends]\n");
+                     "usage: bench_infiller [--repeats N] [--weights W.npz] [--all-backends] "
+                     "[--threads 1,2]\n");
         return 2;
       }
     }
@@ -183,8 +203,8 @@ int main(int argc, char** argv) {
                                                                     : hawor::MatmulBackend::Eigen);
     }
     for (auto b : backends) {
-      bench<float>(npz, b, repeats);
-      bench<double>(npz, b, repeats);
+      for (int t : threadCounts) bench<float>(npz, b, repeats, t);
+      for (int t : threadCounts) bench<double>(npz, b, repeats, t);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s\n", e.what());

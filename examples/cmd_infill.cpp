@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,13 +15,15 @@
 #include "hawor/hand/mirror.hpp"
 #include "hawor/io/npz.hpp"
 #include "hawor/motion/motion.hpp"
+#include "hawor/motion/transformer_infill.hpp"
+#include "hawor/parallel.hpp"
 
 namespace hawor_cli {
 namespace {
 
 const char* kInfillHelp =
     "usage: hawor infill --in HANDS.npz --out FILLED.npz [--method last|lerp|spline|transformer]\n"
-    "                    [--weights W.npz] [--smooth] [--model FILE|default] [--joints]\n"
+    "                    [--weights W.npz] [--threads N] [--smooth] [--model FILE|default] [--joints]\n"
     "\n"
     "Fills the frames where a hand was not observed, per hand, in the hand's canonical space\n"
     "(DESIGN section 7). HANDS.npz holds, per hand (key prefix left_ and/or right_), the world-space\n"
@@ -36,8 +39,12 @@ const char* kInfillHelp =
     "  --method M     spline (default): the data-free cubic Hermite / SO(3) spline with boundary\n"
     "                 velocities from the visible frames; lerp: LERP/SLERP (the paper's baseline);\n"
     "                 last: repeat the last observed frame; transformer: the original infiller\n"
-    "                 network with --weights (not available yet in this build)\n"
-    "  --weights W    the converted infiller weights (transformer only)\n"
+    "                 network (DESIGN section 7) with --weights: both hands in 120-frame canonical\n"
+    "                 windows, LERP/SLERP pre-fill, the network's output at the missing frames;\n"
+    "                 MANO hands only (15 joint rotations, 10 betas); give --model for the exact\n"
+    "                 canonical frame, as the network is not invariant to rigid motions\n"
+    "  --weights W    the converted infiller weights (transformer only; README: tensor names)\n"
+    "  --threads N    threads of the network's forward pass (transformer only; default 2)\n"
     "  --smooth       first smooth the observed frames lightly (each frame moves by at most\n"
     "                 3 noise sigmas, 1 cm, 0.05 rad); without it observed frames are copied bit\n"
     "                 for bit\n"
@@ -203,7 +210,7 @@ hawor::NpyArray infillRowsArray(const hawor::Sequence<double>& s, const std::vec
 }  // namespace
 
 int cmdInfill(int argc, char** argv) {
-  Args args(argc, argv, 2, {"in", "out", "method", "weights", "model"}, {"smooth", "joints"});
+  Args args(argc, argv, 2, {"in", "out", "method", "weights", "model", "threads"}, {"smooth", "joints"});
   if (args.help()) {
     std::fputs(kInfillHelp, stdout);
     return 0;
@@ -213,16 +220,17 @@ int cmdInfill(int argc, char** argv) {
   const std::string method = args.get("method", "spline");
   if (method != "last" && method != "lerp" && method != "spline" && method != "transformer")
     throw UsageError("--method must be last, lerp, spline or transformer, got '" + method + "'");
-  if (args.has("weights") && method != "transformer")
-    throw UsageError("--weights is only used by --method transformer");
+  const bool transformer = method == "transformer";
+  if (args.has("weights") && !transformer) throw UsageError("--weights is only used by --method transformer");
+  if (args.has("threads") && !transformer) throw UsageError("--threads is only used by --method transformer");
+  if (transformer && !args.has("weights")) throw UsageError("--method transformer needs --weights W.npz");
   if (args.flag("joints") && !args.has("model")) throw UsageError("--joints needs --model FILE|default");
-  if (method == "transformer") {
-    if (!args.has("weights")) throw UsageError("--method transformer needs --weights W.npz");
-    throw hawor::Error("infill: --method transformer is not available yet in this build (use spline, the "
-                       "data-free default)");
-  }
+  const double threadsArg = transformer ? args.number("threads", 2) : 1;
+  if (threadsArg < 1 || threadsArg > 64 || threadsArg != std::floor(threadsArg))
+    throw UsageError("--threads must be a whole number from 1 to 64");
+  const long threads = static_cast<long>(threadsArg);
   hawor::InfillOptions<double> options;
-  options.method = hawor::parseInfillMethod(method);
+  if (!transformer) options.method = hawor::parseInfillMethod(method);
 
   const hawor::Npz z = hawor::Npz::read(in);
   std::array<InfillHandIn, 2> hands = {infillReadHand(z, "left"), infillReadHand(z, "right")};
@@ -235,35 +243,71 @@ int cmdInfill(int argc, char** argv) {
   std::array<hawor::HandModel<double>, 2> models;
   const bool withModel = args.has("model");
   if (withModel) infillLoadModels(args, argv[0], models);
+  // The network (read before any work, so a bad weights file fails fast).
+  std::unique_ptr<hawor::InfillerNet<float>> net;
+  if (transformer) net = std::make_unique<hawor::InfillerNet<float>>(hawor::InfillerNet<float>::read(args.required("weights")));
+
+  // Per hand: the (optionally smoothed) motion and its rest joint 0.
+  std::array<hawor::HandMotion<double>, 2> motion;
+  std::array<hawor::Points3<double>, 2> J0;
+  std::array<hawor::HandNoise<double>, 2> noise;
+  std::array<bool, 2> smoothed = {false, false};
+  for (size_t s = 0; s < 2; ++s) {
+    J0[s] = hawor::Points3<double>::Zero(1, 3);
+    if (!hands[s].present) continue;
+    const std::string side = kInfillSides[s];
+    motion[s] = hands[s].motion;
+    const Eigen::Index nvalid = hawor::countValid(motion[s].valid);
+    // --smooth: the gap filler keeps the noise levels of the raw observations (smoothing hides
+    // the noise from its estimate, not from the boundary velocities).
+    if (args.flag("smooth") && nvalid > 0) {
+      noise[s] = hawor::estimateHandNoise(motion[s]);
+      motion[s] = hawor::smoothObserved(motion[s]);
+      smoothed[s] = true;
+    }
+    if (withModel && nvalid > 0) {
+      // J0 of every frame from its (pre-filled, hence finite) betas.
+      J0[s] = infillRestRoot(models[s], hawor::fillLinear(motion[s].betas, motion[s].valid), in + ": " + side + " hand");
+    }
+    if (nvalid == 0)
+      std::fprintf(stderr, "hawor infill: %s hand: no observed frame, written unchanged (nothing filled)\n",
+                   side.c_str());
+  }
+
+  std::array<hawor::InfillResult<double>, 2> result;
+  if (transformer) {
+    // Both hands in one window (DESIGN 7); an absent hand enters as never observed.
+    const size_t have = hands[0].present ? 0 : 1;
+    for (size_t s = 0; s < 2; ++s) {
+      if (hands[s].present) continue;
+      const hawor::HandMotion<double>& o = motion[have];
+      motion[s] = o;
+      motion[s].valid.assign(o.valid.size(), 0);
+    }
+    hawor::ThreadPool pool(static_cast<int>(threads));
+    hawor::TransformerWindowInfiller<double, float> pooled(*net, &pool);
+    pooled.checkLayout(hawor::HandFeatureLayout::of(motion[0]));
+    std::array<hawor::ValidMask, 2> filled;
+    const std::array<hawor::HandMotion<double>, 2> r =
+        hawor::infillWindowed(motion, J0, pooled, net->config().window, &filled);
+    for (size_t s = 0; s < 2; ++s) result[s] = {r[s], filled[s]};
+  } else {
+    for (size_t s = 0; s < 2; ++s)
+      if (hands[s].present)
+        result[s] = hawor::infillHand(motion[s], J0[s], options, smoothed[s] ? &noise[s] : nullptr);
+  }
 
   hawor::Npz outz;
   for (const std::string& name : z.names())
     if (name.rfind("left_", 0) != 0 && name.rfind("right_", 0) != 0) outz.set(name, z.get(name));
   JsonObject summary;
   summary.str("method", method).raw("smooth", args.flag("smooth") ? "true" : "false");
+  if (transformer) summary.integer("threads", threads);
   for (size_t s = 0; s < 2; ++s) {
     if (!hands[s].present) continue;
     const std::string side = kInfillSides[s], p = side + "_";
-    hawor::HandMotion<double> m = hands[s].motion;
-    const Eigen::Index T = m.frames();
-    const Eigen::Index nvalid = hawor::countValid(m.valid);
-    // --smooth: the gap filler keeps the noise levels of the raw observations (smoothing hides
-    // the noise from its estimate, not from the boundary velocities).
-    hawor::HandNoise<double> noise;
-    const bool smooth = args.flag("smooth") && nvalid > 0;
-    if (smooth) {
-      noise = hawor::estimateHandNoise(m);
-      m = hawor::smoothObserved(m);
-    }
-    hawor::Points3<double> J0 = hawor::Points3<double>::Zero(1, 3);
-    if (withModel && nvalid > 0) {
-      // J0 of every frame from its (pre-filled, hence finite) betas.
-      J0 = infillRestRoot(models[s], hawor::fillLinear(m.betas, m.valid), in + ": " + side + " hand");
-    }
-    const hawor::InfillResult<double> r = hawor::infillHand(m, J0, options, smooth ? &noise : nullptr);
-    if (nvalid == 0)
-      std::fprintf(stderr, "hawor infill: %s hand: no observed frame, written unchanged (nothing filled)\n",
-                   side.c_str());
+    const hawor::InfillResult<double>& r = result[s];
+    const Eigen::Index T = r.motion.frames();
     const size_t Tn = static_cast<size_t>(T);
     outz.set(p + "trans", infillRowsArray(r.motion.trans, {Tn, 3}));
     outz.set(p + "rot", infillRowsArray(r.motion.rot, {Tn, 3}));
@@ -277,7 +321,7 @@ int cmdInfill(int argc, char** argv) {
       outz.set(p + "joints_world", infillJoints(models[s], r.motion, in + ": " + side + " hand"));
     summary.raw(side, JsonObject()
                           .integer("frames", static_cast<long long>(T))
-                          .integer("valid", static_cast<long long>(nvalid))
+                          .integer("valid", static_cast<long long>(hawor::countValid(hands[s].motion.valid)))
                           .integer("filled", static_cast<long long>(hawor::countValid(r.filled)))
                           .dump());
   }

@@ -12,9 +12,14 @@
   is held, a fully observed hand is unchanged; 72-column poses and no betas (the WebXR hand) work;
 - `--smooth` moves observed frames by at most 1 cm on jittery input and leaves missing ones to
   the fill;
+- `--method transformer` with random weights of the official sizes written here (names and shapes
+  from the README's table): observed frames bit for bit, exactly the missing frames filled (both
+  hands, one hand absent, a window where one hand is never seen), output unlike LERP, 1 and 2
+  threads equal up to float rounding; a truncated weights file, a missing tensor, a wrong shape,
+  non-MANO hands and bad --threads give errors naming the problem;
 - bad input (missing key, wrong shape, NaN in an observed frame, valid not 0/1, different frame
   counts, no hand) and bad usage (unknown method, --weights without transformer, --joints without
-  --model, transformer) exit non-zero with a message naming the problem.
+  --model, transformer without --weights) exit non-zero with a message naming the problem.
 Run: /usr/bin/python3 test_infill_cli.py path/to/hawor
 """
 import json
@@ -280,13 +285,103 @@ def error_cases(tmp, rng):
             ("unknown method", ["--method", "cubic"], 2, "--method"),
             ("weights without transformer", ["--weights", "w.npz"], 2, "--weights"),
             ("joints without model", ["--joints"], 2, "--model"),
-            ("transformer", ["--method", "transformer", "--weights", "w.npz"], 1, "not available"),
+            ("transformer without weights", ["--method", "transformer"], 2, "--weights"),
+            ("threads without transformer", ["--threads", "2"], 2, "--threads"),
             ("missing --out", None, 2, "--out")]:
         cmd = ["infill", "--in", good] + (["--out", out] + args if args is not None else [])
         rc, _, err = run(*cmd)
         check("usage: " + name, rc == code and needle in err, (rc, err))
     rc, out_help, _ = run("infill", "--help")
     check("help", rc == 0 and "--method" in out_help and "filled" in out_help)
+
+
+def infiller_weights(rng, D=384, H=2048, F=218, layers=8):
+    """Random float32 weights of the official infiller, named as the README's tensor table."""
+    w = {"input_layer.weight": (D, F + 1), "input_layer.bias": (D,),
+         "layer_norm.weight": (D,), "layer_norm.bias": (D,), "decoder.weight": (F, D), "decoder.bias": (F,)}
+    for i in range(layers):
+        a, p, e = "att_layers.%d." % i, "pff_layers.%d." % i, "transformer_encoder.layers.%d." % i
+        w.update({a + n: (D, D) for n in ("q_linear.weight", "k_linear.weight", "v_linear.weight",
+                                          "out_linear.weight")})
+        w.update({a + "layer_norm.weight": (D,), a + "layer_norm.bias": (D,),
+                  p + "layer_norm.weight": (D,), p + "layer_norm.bias": (D,),
+                  p + "network.0.weight": (H, D), p + "network.0.bias": (H,),
+                  p + "network.3.weight": (D, H), p + "network.3.bias": (D,),
+                  e + "self_attn.in_proj_weight": (3 * D, D), e + "self_attn.in_proj_bias": (3 * D,),
+                  e + "self_attn.out_proj.weight": (D, D), e + "self_attn.out_proj.bias": (D,),
+                  e + "linear1.weight": (H, D), e + "linear1.bias": (H,),
+                  e + "linear2.weight": (D, H), e + "linear2.bias": (D,),
+                  e + "norm1.weight": (D,), e + "norm1.bias": (D,), e + "norm2.weight": (D,), e + "norm2.bias": (D,)})
+    out = {}
+    for name, shape in w.items():
+        if "norm" in name:
+            v = rng.uniform(-0.1, 0.1, shape) + (1.0 if name.endswith("weight") else 0.0)
+        else:
+            b = 1.0 / np.sqrt(shape[1] if len(shape) == 2 else D)
+            v = rng.uniform(-b, b, shape)
+        out[name] = v.astype(np.float32)
+    return out
+
+
+def transformer_cases(tmp, rng):
+    weights = os.path.join(tmp, "infiller.npz")
+    w = infiller_weights(rng)
+    np.savez(weights, **w)
+    Tn = 200  # two windows, the second padded
+    left, right = smooth_hand(rng, Tn), smooth_hand(rng, Tn)
+    left["valid"] = mask(Tn, [(20, 50), (130, 140)])
+    right["valid"] = mask(Tn, [(0, 5), (60, 75), (120, 200)])  # never seen in the second window
+    o, s, _ = infill(tmp, "tr2", {"left": left, "right": right}, "--method", "transformer",
+                     "--weights", weights, "--threads", "2")
+    lerp, _, _ = infill(tmp, "tr_lerp", {"left": left, "right": right}, "--method", "lerp")
+    if o is None or lerp is None:
+        return
+    check("transformer summary", s["method"] == "transformer" and s["threads"] == 2, s)
+    for side, h in (("left", left), ("right", right)):
+        p, v = side + "_", h["valid"]
+        same = all(np.array_equal(o[p + k][v], np.asarray(h[k], np.float64)[v]) for k in ("trans", "rot", "hand_pose"))
+        check(side + ": transformer keeps observed frames bit for bit", same)
+        check(side + ": transformer fills exactly the missing frames", np.array_equal(o[p + "filled"], ~v))
+        check(side + ": transformer fills are finite", all(np.isfinite(o[p + k]).all() for k in ("trans", "rot", "hand_pose", "betas")))
+        diff = np.abs(o[p + "trans"][~v] - lerp[p + "trans"][~v]).max()
+        check(side + ": transformer output is not LERP", diff > 1e-3, diff)
+    o1, _, _ = infill(tmp, "tr1", {"left": left, "right": right}, "--method", "transformer",
+                      "--weights", weights, "--threads", "1")
+    if o1 is not None:
+        d = max(np.abs(o1[side + "_" + k] - o[side + "_" + k]).max() for side in ("left", "right")
+                for k in ("trans", "rot", "hand_pose"))
+        check("transformer: 1 and 2 threads agree (float rounding)", d < 1e-3, d)
+    one, s1, _ = infill(tmp, "tr_one", {"right": right}, "--method", "transformer", "--weights", weights)
+    if one is not None:
+        check("transformer: one hand", np.array_equal(one["right_filled"], ~right["valid"]) and
+              not any(k.startswith("left_") for k in one) and np.isfinite(one["right_trans"]).all(), s1)
+    # errors: non-MANO hands, broken weight files, bad --threads
+    webxr = smooth_hand(rng, 40, K=24, B=0)
+    webxr["valid"] = mask(40, [(10, 20)])
+    f = os.path.join(tmp, "tr_webxr.npz")
+    write(f, {"right": webxr})
+    rc, _, err = run("infill", "--in", f, "--out", os.path.join(tmp, "x.npz"), "--method", "transformer",
+                     "--weights", weights)
+    check("transformer: non-MANO hands rejected", rc == 1 and "MANO" in err, (rc, err))
+    good = os.path.join(tmp, "tr_good.npz")
+    write(good, {"left": left})
+    trunc = os.path.join(tmp, "trunc.npz")
+    with open(weights, "rb") as src, open(trunc, "wb") as dst:
+        dst.write(src.read(5_000_000))
+    missing = os.path.join(tmp, "missing.npz")
+    np.savez(missing, **{k: v for k, v in w.items() if k != "att_layers.3.q_linear.weight"})
+    shape = os.path.join(tmp, "shape.npz")
+    np.savez(shape, **dict(w, **{"decoder.bias": w["decoder.bias"][:100]}))
+    for name, path, needle in [("truncated weights", trunc, "trunc.npz"),
+                               ("missing tensor", missing, "att_layers.3.q_linear.weight"),
+                               ("wrong shape", shape, "decoder.bias")]:
+        rc, _, err = run("infill", "--in", good, "--out", os.path.join(tmp, "x.npz"), "--method", "transformer",
+                         "--weights", path)
+        check("transformer: " + name, rc == 1 and needle in err, (rc, err[:300]))
+    for bad_threads in ("0", "1.5", "x"):
+        rc, _, err = run("infill", "--in", good, "--out", os.path.join(tmp, "x.npz"), "--method", "transformer",
+                         "--weights", weights, "--threads", bad_threads)
+        check("transformer: --threads " + bad_threads, rc == 2 and "--threads" in err, (rc, err))
 
 
 def main():
@@ -299,6 +394,7 @@ def main():
         edge_cases(tmp, rng)
         smooth_cases(tmp, rng)
         error_cases(tmp, rng)
+        transformer_cases(tmp, rng)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return cliutil.finish()

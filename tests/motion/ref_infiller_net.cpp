@@ -44,14 +44,14 @@ hawor::ValidMask asMask(const hawor_test::RefArray& a) {
 // max |C++ − onnxruntime| over windows [0, windows) and the largest |y| (for scale).
 template <typename S>
 double maxDiff(const hawor::InfillerNet<S>& net, const hawor_test::RefData& ref, int windows,
-               double* maxAbs = nullptr) {
-  hawor::InfillerWorkspace<S> ws(net.config());
+               double* maxAbs = nullptr, hawor::ThreadPool* pool = nullptr) {
+  hawor::InfillerWorkspace<S> ws(net.config(), pool ? pool->size() : 1);
   hawor::RowMatrixX<S> y;
   double worst = 0, big = 0;
   for (int i = 0; i < windows; ++i) {
     const std::string k = std::to_string(i);
     const auto x = asMatrix<S>(ref["x" + k]);
-    net.forward(x, asMask(ref["valid" + k]), y, ws);
+    net.forward(x, asMask(ref["valid" + k]), y, ws, pool);
     const Eigen::MatrixXd expect = asMatrix<double>(ref["y" + k]);
     worst = std::max(worst, (y.template cast<double>() - expect).cwiseAbs().maxCoeff());
     big = std::max(big, expect.cwiseAbs().maxCoeff());
@@ -73,15 +73,17 @@ TEST_CASE("infiller network matches onnxruntime (official sizes, random weights)
   const hawor::InfillerConfig official;
   double yMax = 0;
   const auto run = [&](auto scalar, hawor::MatmulBackend backend, int n, double tol,
-                       const char* label) {
+                       const char* label, int threads = 1) {
     using S = decltype(scalar);
     const hawor::InfillerNet<S> net(hawor::loadInfillerWeights<S>(npz, official), backend);
-    const double d = infiller_ref::maxDiff(net, ref, n, &yMax);
+    hawor::ThreadPool pool(threads);
+    const double d = infiller_ref::maxDiff(net, ref, n, &yMax, &pool);
     std::printf("infiller vs onnxruntime (|y| <= %.3g): max |diff| %s %.3g\n", yMax, label, d);
     CHECK(d <= tol);
   };
   run(double(), hawor::MatmulBackend::Eigen, windows, 1e-4, "double/Eigen");
   run(float(), hawor::MatmulBackend::Eigen, windows, 1e-4, "float/Eigen");
+  run(float(), hawor::MatmulBackend::Eigen, windows, 1e-4, "float/Eigen/2 threads", 2);
   // the WebAssembly backend (packed kernel), natively, on one masked window
   run(double(), hawor::MatmulBackend::Packed, 1, 1e-4, "double/Packed");
   run(float(), hawor::MatmulBackend::Packed, 1, 1e-4, "float/Packed");

@@ -281,6 +281,8 @@ TEMPLATE_TEST_CASE("infiller forward equals a naive implementation", "[motion][i
     const hawor::InfillerNet<S> net(ws, backend);
     hawor::InfillerWorkspace<S> work(c);
     hawor::RowMatrixX<S> y;
+    hawor::ThreadPool pool2(2), pool3(3);
+    hawor::InfillerWorkspace<S> work3(c, 3);
     for (Eigen::Index T : {Eigen::Index(c.window), Eigen::Index(5), Eigen::Index(1)}) {
       const infiller_test::MatD x = infiller_test::randomMatrix(T, c.features, rng);
       hawor::ValidMask valid = infiller_test::gapMask(T);
@@ -290,6 +292,15 @@ TEMPLATE_TEST_CASE("infiller forward equals a naive implementation", "[motion][i
       REQUIRE(y.rows() == T);
       REQUIRE(y.cols() == c.features);
       CHECK((y.template cast<double>() - expect).cwiseAbs().maxCoeff() <= infiller_test::tol<S>());
+      // the frames split between 2 and 3 threads (3 row tiles of 4 at T = 12; one at T = 1,
+      // 5; a 2-thread pool with a 3-thread workspace, and a 3-thread pool with a 1-thread one)
+      hawor::RowMatrixX<S> yt;
+      for (auto [pool, wsp] : {std::pair{&pool2, &work3}, std::pair{&pool3, &work3},
+                               std::pair{&pool3, &work}}) {
+        net.forward(x.cast<S>(), valid, yt, *wsp, pool);
+        CHECK((yt.template cast<double>() - expect).cwiseAbs().maxCoeff() <=
+              infiller_test::tol<S>());
+      }
       // all valid, and the allocating overload
       valid.assign(static_cast<size_t>(T), 1);
       const hawor::RowMatrixX<S> y2 = net.forward(x.cast<S>(), valid);

@@ -29,7 +29,8 @@
 // Cost: ≈ 8.7 GFLOP per 120-frame window (the feed-forwards are 70 %). Natively Eigen's GEMM
 // carries it; in WebAssembly the packed kernel of matmul.hpp. Memory: the weights (34.8 M
 // values: 139 MB in float, twice in double) and a workspace of 0.85 M values (3.4 MB in float).
-// Thread-safety: forward() is const; concurrent calls need one InfillerWorkspace each.
+// Thread-safety: forward() is const; concurrent calls need one InfillerWorkspace each. One call
+// may itself run on several threads (a ThreadPool: the window's frames split between them).
 #pragma once
 
 #include <Eigen/Core>
@@ -43,6 +44,7 @@
 #include "hawor/motion/infiller_weights.hpp"
 #include "hawor/motion/matmul.hpp"
 #include "hawor/motion/sequence.hpp"
+#include "hawor/parallel.hpp"
 
 namespace hawor {
 
@@ -61,32 +63,45 @@ RowMatrixX<Scalar> sinusoidalPositionalEncoding(int length, int dModel) {
 }
 
 /// Pre-allocated buffers of one forward pass (rows sized for the full window W), so that
-/// forward() allocates nothing of its own. One per thread.
+/// forward() allocates nothing of its own. `threads` = the most threads one forward may use
+/// (the size of the ThreadPool passed to it): each has its own attention and packing buffers.
+/// One workspace per concurrent forward().
 template <typename Scalar>
 struct InfillerWorkspace {
-  explicit InfillerWorkspace(const InfillerConfig& c) {
+  explicit InfillerWorkspace(const InfillerConfig& c, int threads = 1) {
     c.validate();
     const Eigen::Index W = c.window, D = c.dModel;
     input.resize(W, c.inputDim());
     h.resize(W, D);
     n.resize(W, D);
-    qkv.resize(W, 3 * D);
+    for (auto& q : qkv) q.resize(W, 3 * D);
     ctx.resize(W, D);
     tmp.resize(W, D);
     ff.resize(W, c.ffDim);
-    scores.resize(W, W);
     keyMask.resize(W);
     const Eigen::Index maxK =
         std::max<Eigen::Index>({W, Eigen::Index(c.inputDim()), D, Eigen::Index(c.ffDim)});
-    scratch.resize(static_cast<size_t>(packedScratchSize(W, maxK)));
-    keys.reserve(c.headDim(), W);
-    values.reserve(W, c.headDim());
+    part.resize(static_cast<size_t>(std::max(1, threads)));
+    for (Part& p : part) {
+      p.scores.resize(W, W);
+      p.scratch.resize(static_cast<size_t>(packedScratchSize(W, maxK)));
+      p.keys.reserve(c.headDim(), W);
+      p.values.reserve(W, c.headDim());
+    }
   }
 
-  RowMatrixX<Scalar> input, h, n, qkv, ctx, tmp, ff, scores;
+  /// Buffers of one thread.
+  struct Part {
+    RowMatrixX<Scalar> scores;         // its query rows × the window's keys
+    std::vector<Scalar> scratch;       // A packing of the packed backend
+    PackedPanels<Scalar> keys, values; // one head's Kᵀ and V (packed backend)
+  };
+
+  RowMatrixX<Scalar> input, h, n, ctx, tmp, ff;
+  RowMatrixX<Scalar> qkv[2];  // q | k | v of layer l in qkv[l % 2] (threads read all of one
+                              // while they write their rows of the other)
   Eigen::Array<Scalar, 1, Eigen::Dynamic> keyMask;  // 1 = key may be attended, 0 = masked
-  std::vector<Scalar> scratch;                      // A packing of the packed backend
-  PackedPanels<Scalar> keys, values;                // one head's Kᵀ and V (packed backend)
+  std::vector<Part> part;                           // one per thread
 };
 
 /// The infiller network with its weights, ready to run (see the file comment for the maths).
@@ -149,11 +164,15 @@ class InfillerNet {
 
   /// y (T × F) for the window x (T × F, 1 ≤ T ≤ W) with per-frame validity `valid` (T entries,
   /// nonzero = observed). `y` is resized to T × F when it is not already (no other allocation
-  /// happens here, Eigen's GEMM blocking buffers aside). Throws hawor::Error for wrong sizes, a
+  /// happens here, Eigen's GEMM blocking buffers aside). With a pool, the frames (rows) are split
+  /// between min(pool size, workspace threads) threads: every step but attention is per row, and
+  /// attention reads the keys and values of all rows, so one fork–join per layer suffices. The
+  /// result equals the one-thread result up to rounding. Throws hawor::Error for wrong sizes, a
   /// non-finite input, or (with masked blocks) a window without any valid frame, where every
   /// attention key would be masked (the official model returns NaN there).
   void forward(const Eigen::Ref<const RowMatrixX<Scalar>>& x, const ValidMask& valid,
-               RowMatrixX<Scalar>& y, InfillerWorkspace<Scalar>& ws) const {
+               RowMatrixX<Scalar>& y, InfillerWorkspace<Scalar>& ws,
+               ThreadPool* pool = nullptr) const {
     const Eigen::Index T = x.rows(), F = config_.features, D = config_.dModel;
     if (T < 1 || T > config_.window || x.cols() != F)
       throw Error("InfillerNet: input is " + std::to_string(T) + "x" + std::to_string(x.cols()) +
@@ -161,7 +180,7 @@ class InfillerNet {
                   " with 1 <= T <= " + std::to_string(config_.window));
     checkMask(valid, T, "InfillerNet");
     if (ws.h.rows() != config_.window || ws.h.cols() != D || ws.ff.cols() != config_.ffDim ||
-        ws.input.cols() != config_.inputDim())
+        ws.input.cols() != config_.inputDim() || ws.part.empty())
       throw Error("InfillerNet: workspace was made for another configuration");
     for (Eigen::Index t = 0; t < T; ++t)
       if (!x.row(t).allFinite())
@@ -170,60 +189,37 @@ class InfillerNet {
       throw Error("InfillerNet: no valid frame in the window: every attention key is masked");
     if (y.rows() != T || y.cols() != F) y.resize(T, F);
 
-    // input layer + positional table
     for (Eigen::Index t = 0; t < T; ++t) {
       const bool v = valid[static_cast<size_t>(t)] != 0;
       ws.input.row(t).head(F) = x.row(t);
       ws.input(t, F) = v ? Scalar(1) : Scalar(0);
       ws.keyMask(t) = v ? Scalar(1) : Scalar(0);
     }
-    auto h = ws.h.topRows(T);
-    auto n = ws.n.topRows(T);
-    auto tmp = ws.tmp.topRows(T);
-    auto ff = ws.ff.topRows(T);
-    Scalar* scratch = ws.scratch.data();
-    input_.apply(ws.input.topRows(T), h, scratch);
-    h += positional_.topRows(T);
-
-    // stage 1: pre-LN masked attention blocks
-    const Scalar maskedScale = Scalar(1) / std::sqrt(Scalar(D));
-    for (const Masked& m : masked_) {
-      layerNorm(h, m.attnNormWeight, m.attnNormBias, n);
-      m.qkv.apply(n, ws.qkv.topRows(T), scratch);
-      attention(T, maskedScale, true, ws);
-      m.out.apply(ws.ctx.topRows(T), tmp, scratch);
-      h = n + tmp;  // official: the residual adds the normalised input
-      layerNorm(h, m.ffNormWeight, m.ffNormBias, n);
-      m.ff1.apply(n, ff, scratch);
-      ff = ff.cwiseMax(Scalar(0));
-      m.ff2.apply(ff, tmp, scratch);
-      h += tmp;
+    // Row ranges: whole tiles of the packed kernel (kPackedMR rows), as even as possible.
+    const Eigen::Index tiles = (T + kPackedMR - 1) / kPackedMR;
+    int parts = pool ? std::min<int>(pool->size(), static_cast<int>(ws.part.size())) : 1;
+    parts = static_cast<int>(std::min<Eigen::Index>(parts, tiles));
+    const int layers = static_cast<int>(masked_.size() + encoder_.size());
+    for (int phase = 0; phase <= layers; ++phase) {
+      const auto task = [&](int p) {
+        const Eigen::Index r0 = std::min(T, tiles * p / parts * kPackedMR);
+        const Eigen::Index r1 = std::min(T, tiles * (p + 1) / parts * kPackedMR);
+        if (r1 > r0) rowsPhase(phase, r0, r1 - r0, T, y, ws, ws.part[static_cast<size_t>(p)]);
+      };
+      if (parts > 1) {
+        pool->run(parts, task);
+      } else {
+        task(0);
+      }
     }
-    layerNorm(h, normWeight_, normBias_, h);
-
-    // stage 2: post-LN transformer encoder, GELU, no mask
-    const Scalar encoderScale = Scalar(1) / std::sqrt(Scalar(config_.headDim()));
-    for (const Encoder& e : encoder_) {
-      e.qkv.apply(h, ws.qkv.topRows(T), scratch);
-      attention(T, encoderScale, false, ws);
-      e.out.apply(ws.ctx.topRows(T), tmp, scratch);
-      h += tmp;
-      layerNorm(h, e.norm1Weight, e.norm1Bias, h);
-      e.ff1.apply(h, ff, scratch);
-      gelu(ff);
-      e.ff2.apply(ff, tmp, scratch);
-      h += tmp;
-      layerNorm(h, e.norm2Weight, e.norm2Bias, h);
-    }
-    decoder_.apply(h, y, scratch);
   }
 
   /// forward() with its own workspace and output (allocates; for one-off calls).
   RowMatrixX<Scalar> forward(const Eigen::Ref<const RowMatrixX<Scalar>>& x,
-                             const ValidMask& valid) const {
-    InfillerWorkspace<Scalar> ws(config_);
+                             const ValidMask& valid, ThreadPool* pool = nullptr) const {
+    InfillerWorkspace<Scalar> ws(config_, pool ? pool->size() : 1);
     RowMatrixX<Scalar> y;
-    forward(x, valid, y, ws);
+    forward(x, valid, y, ws, pool);
     return y;
   }
 
@@ -263,25 +259,84 @@ class InfillerNet {
     a = Scalar(0.5) * a * (Scalar(1) + (a * invSqrt2).erf());
   }
 
-  /// Multi-head attention over ws.qkv (T × 3D: q | k | v, heads contiguous within each) into
-  /// ws.ctx (T × D, heads concatenated): ctx_h = softmax(q_h·k_hᵀ·scale)·v_h, the softmax over
-  /// the keys allowed by ws.keyMask when `masked` (the others get weight exactly 0).
-  void attention(Eigen::Index T, Scalar scale, bool masked, InfillerWorkspace<Scalar>& ws) const {
+  /// Phase `phase` of the forward pass for the rows [r0, r0 + R) of a T-frame window: the
+  /// input layer (phase 0) or the rest of layer phase − 1 from its attention on (which reads
+  /// every row's keys and values of that layer), then the start of layer `phase` up to its q, k,
+  /// v (or, after the last layer, the output layer into y).
+  void rowsPhase(int phase, Eigen::Index r0, Eigen::Index R, Eigen::Index T, RowMatrixX<Scalar>& y,
+                 InfillerWorkspace<Scalar>& ws, typename InfillerWorkspace<Scalar>::Part& part) const {
+    const int M = static_cast<int>(masked_.size());
+    const int layers = M + static_cast<int>(encoder_.size());
+    auto h = ws.h.middleRows(r0, R);
+    auto n = ws.n.middleRows(r0, R);
+    auto tmp = ws.tmp.middleRows(r0, R);
+    auto ff = ws.ff.middleRows(r0, R);
+    auto ctx = ws.ctx.middleRows(r0, R);
+    Scalar* scratch = part.scratch.data();
+    if (phase == 0) {
+      input_.apply(ws.input.middleRows(r0, R), h, scratch);
+      h += positional_.middleRows(r0, R);
+    } else if (phase - 1 < M) {
+      // stage 1: the rest of a pre-LN masked attention block
+      const Masked& m = masked_[static_cast<size_t>(phase - 1)];
+      attention(ws.qkv[(phase - 1) % 2], r0, R, T, Scalar(1) / std::sqrt(Scalar(config_.dModel)),
+                true, ws, part);
+      m.out.apply(ctx, tmp, scratch);
+      h = n + tmp;  // official: the residual adds the normalised input
+      layerNorm(h, m.ffNormWeight, m.ffNormBias, n);
+      m.ff1.apply(n, ff, scratch);
+      ff = ff.cwiseMax(Scalar(0));
+      m.ff2.apply(ff, tmp, scratch);
+      h += tmp;
+    } else {
+      // stage 2: the rest of a post-LN encoder layer (GELU, no mask)
+      const Encoder& e = encoder_[static_cast<size_t>(phase - 1 - M)];
+      attention(ws.qkv[(phase - 1) % 2], r0, R, T,
+                Scalar(1) / std::sqrt(Scalar(config_.headDim())), false, ws, part);
+      e.out.apply(ctx, tmp, scratch);
+      h += tmp;
+      layerNorm(h, e.norm1Weight, e.norm1Bias, h);
+      e.ff1.apply(h, ff, scratch);
+      gelu(ff);
+      e.ff2.apply(ff, tmp, scratch);
+      h += tmp;
+      layerNorm(h, e.norm2Weight, e.norm2Bias, h);
+    }
+    if (phase == M) layerNorm(h, normWeight_, normBias_, h);  // after stage 1
+    if (phase == layers) {
+      decoder_.apply(h, y.middleRows(r0, R), scratch);
+    } else if (phase < M) {
+      const Masked& m = masked_[static_cast<size_t>(phase)];
+      layerNorm(h, m.attnNormWeight, m.attnNormBias, n);
+      m.qkv.apply(n, ws.qkv[phase % 2].middleRows(r0, R), scratch);
+    } else {
+      encoder_[static_cast<size_t>(phase - M)].qkv.apply(h, ws.qkv[phase % 2].middleRows(r0, R),
+                                                          scratch);
+    }
+  }
+
+  /// Multi-head attention of the query rows [r0, r0 + R) over all T keys of `qkv` (T × 3D:
+  /// q | k | v, heads contiguous within each) into those rows of ws.ctx (heads concatenated):
+  /// ctx_h = softmax(q_h·k_hᵀ·scale)·v_h, the softmax over the keys allowed by ws.keyMask when
+  /// `masked` (the others get weight exactly 0).
+  void attention(const RowMatrixX<Scalar>& qkv, Eigen::Index r0, Eigen::Index R, Eigen::Index T,
+                 Scalar scale, bool masked, InfillerWorkspace<Scalar>& ws,
+                 typename InfillerWorkspace<Scalar>::Part& part) const {
     const Eigen::Index D = config_.dModel, dh = config_.headDim();
-    auto S = ws.scores.topLeftCorner(T, T);
+    auto S = part.scores.topLeftCorner(R, T);
     const auto mask = ws.keyMask.head(T);
     const Scalar lowest = std::numeric_limits<Scalar>::lowest();
-    const Eigen::Index ld = ws.qkv.cols();
+    const Eigen::Index ld = qkv.cols(), ldc = ws.ctx.cols();
     for (int hd = 0; hd < config_.heads; ++hd) {
       const Eigen::Index c = hd * dh;
       if (backend_ == MatmulBackend::Eigen) {
-        S.noalias() = ws.qkv.block(0, c, T, dh) * ws.qkv.block(0, D + c, T, dh).transpose();
+        S.noalias() = qkv.block(r0, c, R, dh) * qkv.block(0, D + c, T, dh).transpose();
       } else {
-        ws.keys.pack(ws.qkv.data() + D + c, 1, ld, dh, T);  // k_hᵀ: dh × T
-        matmulPacked(ws.qkv.data() + c, ld, T, ws.keys, S.data(), S.outerStride(),
-                     static_cast<const Scalar*>(nullptr), ws.scratch.data());
+        part.keys.pack(qkv.data() + D + c, 1, ld, dh, T);  // k_hᵀ: dh × T
+        matmulPacked(qkv.data() + r0 * ld + c, ld, R, part.keys, S.data(), S.outerStride(),
+                     static_cast<const Scalar*>(nullptr), part.scratch.data());
       }
-      for (Eigen::Index t = 0; t < T; ++t) {
+      for (Eigen::Index t = 0; t < R; ++t) {
         auto r = S.row(t).array();
         r *= scale;
         if (masked) r = (mask > Scalar(0)).select(r, lowest);
@@ -291,11 +346,11 @@ class InfillerNet {
         r /= r.sum();
       }
       if (backend_ == MatmulBackend::Eigen) {
-        ws.ctx.block(0, c, T, dh).noalias() = S * ws.qkv.block(0, 2 * D + c, T, dh);
+        ws.ctx.block(r0, c, R, dh).noalias() = S * qkv.block(0, 2 * D + c, T, dh);
       } else {
-        ws.values.pack(ws.qkv.data() + 2 * D + c, ld, 1, T, dh);  // v_h: T × dh
-        matmulPacked(S.data(), S.outerStride(), T, ws.values, ws.ctx.data() + c,
-                     ws.ctx.outerStride(), static_cast<const Scalar*>(nullptr), ws.scratch.data());
+        part.values.pack(qkv.data() + 2 * D + c, ld, 1, T, dh);  // v_h: T × dh
+        matmulPacked(S.data(), S.outerStride(), R, part.values, ws.ctx.data() + r0 * ldc + c, ldc,
+                     static_cast<const Scalar*>(nullptr), part.scratch.data());
       }
     }
   }
