@@ -1,4 +1,4 @@
-// Unit/property tests of motion/matmul.hpp, motion/infiller_weights.hpp and
+// Unit/property tests of hawor/matmul.hpp, motion/infiller_weights.hpp and
 // motion/infiller_net.hpp (native and WASM): the packed kernel against plain loops, the network
 // against a naive implementation written here from DESIGN §7 / the official model, the
 // attention mask, the positional table, and the weight loader's errors. (The comparison with

@@ -366,6 +366,7 @@ struct HandBatchWorkspace {
   std::vector<Mat3<Scalar>> rot;   ///< J local rotations of each frame of the current block
   MatX<Scalar> features;           ///< 9(J−1) × block pose features
   MatX<Scalar> correctives;        ///< 3V × block pose correctives
+  std::vector<Scalar> apack;       ///< A packing of matmulPacked (no Eigen SIMD kernels)
 };
 
 /// The forward pass of n frames: outs[i] = forward(model, poses[i]). The pose correctives of a
@@ -400,9 +401,18 @@ void forwardBatch(const HandModel<Scalar>& model, const HandPose<Scalar>* poses,
       for (int i = 0; i < m; ++i) {
         hand_detail::poseFeatures(J, ws.rot.data() + nJ * i, ws.features.col(i).data());
       }
+#if defined(EIGEN_VECTORIZE)
       ws.correctives.leftCols(m).setZero();
       auto C = ws.correctives.leftCols(m);
       hand_detail::addProduct(model.posedirs, ws.features.leftCols(m), C);
+#else
+      // Cᵀ (m × 3V, row-major = C column-major) = Fᵀ (m × P, row-major = F) · posedirsᵀ, with
+      // the register-blocked kernel (f64x2 / f32x4 tiles): about twice the plain loops' speed.
+      ws.apack.resize(static_cast<std::size_t>(packedScratchSize(kBlock, P)));
+      matmulPacked(ws.features.data(), Eigen::Index(P), Eigen::Index(m), model.posedirsPacked,
+                   ws.correctives.data(), ws.correctives.rows(), static_cast<const Scalar*>(nullptr),
+                   ws.apack.data());
+#endif
     }
     for (int i = 0; i < m; ++i) {
       const HandPose<Scalar>& pose = poses[b0 + i];

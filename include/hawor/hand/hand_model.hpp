@@ -14,6 +14,7 @@
 #pragma once
 
 #include "hawor/common.hpp"
+#include "hawor/matmul.hpp"
 
 #include <atomic>
 #include <cstdint>
@@ -156,6 +157,11 @@ struct HandModel {
       }
       skinStart[static_cast<std::size_t>(v) + 1] = static_cast<int>(skinJoint.size());
     }
+#if !defined(EIGEN_VECTORIZE)
+    // Without Eigen's SIMD kernels (WebAssembly) the batched pass multiplies by posedirsᵀ with
+    // the packed kernel of matmul.hpp: B(r, j) = posedirs(j, r), column-major storage.
+    posedirsPacked.pack(posedirs.data(), posedirs.rows(), 1, posedirs.cols(), posedirs.rows());
+#endif
     prepared_ = true;
     revision_ = nextRevision();
   }
@@ -170,6 +176,9 @@ struct HandModel {
   std::vector<int> skinStart;     ///< (V+1) CSR row starts into skinJoint / skinWeight
   std::vector<int> skinJoint;     ///< joints with a non-zero weight, per vertex
   std::vector<Scalar> skinWeight;  ///< the matching weights
+  /// posedirsᵀ (9(J−1) × 3V) packed for matmulPacked; filled only where Eigen has no SIMD
+  /// kernels (EIGEN_VECTORIZE undefined, e.g. WebAssembly), empty otherwise.
+  PackedPanels<Scalar> posedirsPacked;
 
  private:
   bool prepared_ = false;

@@ -42,7 +42,7 @@
 
 #include "hawor/common.hpp"
 #include "hawor/motion/infiller_weights.hpp"
-#include "hawor/motion/matmul.hpp"
+#include "hawor/matmul.hpp"
 #include "hawor/motion/sequence.hpp"
 #include "hawor/parallel.hpp"
 

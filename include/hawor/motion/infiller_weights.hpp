@@ -43,7 +43,7 @@
 
 #include "hawor/common.hpp"
 #include "hawor/io/npz.hpp"
-#include "hawor/motion/matmul.hpp"
+#include "hawor/matmul.hpp"
 
 namespace hawor {
 

@@ -1,6 +1,6 @@
-// hawor/motion/matmul.hpp — the matrix products of the infiller network (infiller_net.hpp):
-// C = A·B (+ a bias row) with A row-major (activations, n×k: one frame per row) and B constant
-// weights or per-head activations (k×m).
+// hawor/matmul.hpp — the matrix products of the infiller network (motion/infiller_net.hpp) and of
+// the batched hand forward pass (hand/forward.hpp): C = A·B (+ a bias row) with A row-major
+// (activations, n×k: one frame per row) and B constant weights or per-head activations (k×m).
 //
 // Two backends, equal up to rounding (the order of the sums differs):
 //   Eigen   Eigen's GEMM on row-major blocks: the native default (Eigen's SSE/AVX/AVX-512/NEON
