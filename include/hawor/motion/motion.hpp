@@ -10,6 +10,7 @@
 #include "hawor/motion/local_poly.hpp"
 #include "hawor/motion/motion_noise.hpp"
 #include "hawor/motion/prefill.hpp"
+#include "hawor/motion/rest_root.hpp"
 #include "hawor/motion/sequence.hpp"
 #include "hawor/motion/slerp.hpp"
 #include "hawor/motion/smooth.hpp"

@@ -4,3 +4,4 @@
 #include "hawor/render/image.hpp"
 #include "hawor/render/rasterizer.hpp"
 #include "hawor/render/mask.hpp"
+#include "hawor/render/hand_masks.hpp"

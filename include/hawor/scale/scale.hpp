@@ -9,3 +9,4 @@
 #include "hand_smoothness_scale.hpp"
 #include "hand_scale.hpp"
 #include "fuse_scale.hpp"
+#include "metric_scale.hpp"
