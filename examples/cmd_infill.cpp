@@ -15,6 +15,7 @@
 #include "hawor/hand/mirror.hpp"
 #include "hawor/io/npz.hpp"
 #include "hawor/motion/motion.hpp"
+#include "hawor/motion/rest_root.hpp"
 #include "hawor/motion/transformer_infill.hpp"
 #include "hawor/parallel.hpp"
 
@@ -160,22 +161,6 @@ void infillLoadModels(const Args& args, const char* argv0, std::array<hawor::Han
   models[static_cast<size_t>(side)] = std::move(h.model);
 }
 
-/// J0(β_t) per frame (joint 0 of the shaped rest hand) for betas that are finite everywhere.
-hawor::Points3<double> infillRestRoot(const hawor::HandModel<double>& model, const hawor::Sequence<double>& betas,
-                                      const std::string& what) {
-  if (betas.cols() > model.numBetas())
-    throw hawor::Error(what + ": " + std::to_string(betas.cols()) + " betas, the --model has " +
-                       std::to_string(model.numBetas()));
-  hawor::Points3<double> J0(betas.rows(), 3);
-  hawor::HandWorkspace<double> ws;
-  for (Eigen::Index t = 0; t < betas.rows(); ++t) {
-    const hawor::VecX<double> b = betas.row(t).transpose();
-    hawor::shapeHand(model, b, ws);
-    J0.row(t) = ws.jRest.row(0);
-  }
-  return J0;
-}
-
 /// (T,K,3) keypoints of every frame whose parameters are finite (NaN elsewhere).
 hawor::NpyArray infillJoints(const hawor::HandModel<double>& model, const hawor::HandMotion<double>& m,
                              const std::string& what) {
@@ -267,7 +252,11 @@ int cmdInfill(int argc, char** argv) {
     }
     if (withModel && nvalid > 0) {
       // J0 of every frame from its (pre-filled, hence finite) betas.
-      J0[s] = infillRestRoot(models[s], hawor::fillLinear(motion[s].betas, motion[s].valid), in + ": " + side + " hand");
+      try {
+        J0[s] = hawor::restRootJoints(models[s], motion[s]);
+      } catch (const hawor::Error& e) {
+        throw hawor::Error(in + ": " + side + " hand: " + std::string(e.what()).substr(7));  // drop "hawor: "
+      }
     }
     if (nvalid == 0)
       std::fprintf(stderr, "hawor infill: %s hand: no observed frame, written unchanged (nothing filled)\n",

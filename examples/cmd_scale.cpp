@@ -13,6 +13,7 @@
 #include "hawor/io/npz.hpp"
 #include "hawor/io/tum.hpp"
 #include "hawor/scale/scale.hpp"
+#include "hawor/scale/metric_scale.hpp"
 
 namespace hawor_cli {
 namespace {
@@ -78,30 +79,30 @@ int cmdScale(int argc, char** argv) {
     throw UsageError("give --metric-depth DIR, --hands HANDS_CAM.npz, or both");
   }
   if (traj.size() < 3) throw hawor::Error(args.required("traj") + ": need at least 3 poses");
-  hawor::AdaptiveScaleOptions<double> aopt;
+  // Defaults of the library's one-call metric scale (scale/metric_scale.hpp): SLAM-depth
+  // sampling with 30 points per window, Huber over keyframes, hold windows of half a second.
+  hawor::MetricScaleOptions<double> opt;
+  hawor::AdaptiveScaleOptions<double>& aopt = opt.depth;
   aopt.nearM = args.number("near", aopt.nearM);
   aopt.farM = args.number("far", aopt.farM);
   aopt.sigma = args.number("sigma", aopt.sigma);
   const std::string sampling = args.get("sampling", "slam-depth");
   if (sampling == "official") {
     aopt.sampling = hawor::AdaSmSampling::Official;
-  } else if (sampling == "slam-depth") {
-    aopt.sampling = hawor::AdaSmSampling::SlamDepth;
-    aopt.minPixels = 30;  // sparse SLAM depths: a window of 10 points is too noisy
-  } else {
+    aopt.minPixels = hawor::AdaptiveScaleOptions<double>().minPixels;
+  } else if (sampling != "slam-depth") {
     throw UsageError("--sampling must be 'official' or 'slam-depth', not '" + sampling + "'");
   }
   const std::string combine = args.get("combine", "huber");
-  if (combine == "huber") {
-    aopt.combine = hawor::KeyframeCombine::Huber;
-  } else if (combine == "median") {
+  if (combine == "median") {
     aopt.combine = hawor::KeyframeCombine::Median;
-  } else {
+  } else if (combine != "huber") {
     throw UsageError("--combine must be 'huber' or 'median', not '" + combine + "'");
   }
+  if (traj.size() >= 2 && traj[1].t > traj[0].t) opt.setFps(1.0 / (traj[1].t - traj[0].t));
 
-  JsonObject j;
-  double depthScale = NAN, depthConf = 0, handScale = NAN, handConf = 0;
+  // Depth cue: each keyframe's sparse SLAM depths paired with its metric depth map (and mask).
+  std::vector<hawor::KeyframeDepthPairs<double>> keyframes;
   if (args.has("metric-depth")) {
     const std::string kdPath = args.required("keyframe-depths");
     const hawor::Npz kd = hawor::Npz::read(kdPath);
@@ -115,8 +116,6 @@ int cmdScale(int argc, char** argv) {
     if (kf.size() != depth.size() || uv.size() != 2 * depth.size()) {
       throw hawor::Error(kdPath + ": kf, uv and depth disagree in length");
     }
-    std::vector<std::vector<double>> d(frames.size()), D(frames.size());
-    std::vector<std::vector<char>> hand(frames.size());
     const std::string dir = args.required("metric-depth");
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const std::string p = dir + "/" + frameName(frames[k], ".npy");
@@ -125,49 +124,26 @@ int cmdScale(int argc, char** argv) {
       const int H = static_cast<int>(a.shape[0]), W = static_cast<int>(a.shape[1]);
       const std::vector<double> m = a.as<double>(p);
       hawor::ImageU8 mask;
-      const bool haveMask = args.has("masks") && exists(args.get("masks", "") + "/" + frameName(frames[k], ".png"));
+      const std::string mp = args.get("masks", "") + "/" + frameName(frames[k], ".png");
+      const bool haveMask = args.has("masks") && exists(mp);
       if (haveMask) {
-        const std::string mp = args.get("masks", "") + "/" + frameName(frames[k], ".png");
         mask = hawor::readImage(mp, 1);
         if (mask.width != W || mask.height != H) throw hawor::Error(mp + ": mask size differs from the depth map " + p);
       }
+      std::vector<double> kuv, kdepth;
       for (std::size_t i = 0; i < depth.size(); ++i) {
         if (kf[i] != static_cast<int>(k)) continue;
-        const long x = std::lround(uv[2 * i]), y = std::lround(uv[2 * i + 1]);
-        if (x < 0 || y < 0 || x >= W || y >= H) continue;
-        d[k].push_back(depth[i]);
-        D[k].push_back(m[static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)]);
-        hand[k].push_back(haveMask && mask.at(int(x), int(y)) ? 1 : 0);
+        kuv.push_back(uv[2 * i]), kuv.push_back(uv[2 * i + 1]), kdepth.push_back(depth[i]);
       }
-    }
-    const hawor::SequenceScale<double> s = hawor::adaptiveScale(d, D, &hand, aopt);
-    j.integer("keyframes", s.keyframes).integer("keyframes_fitted", s.fitted);
-    if (s.ok()) {
-      depthScale = s.scale;
-      depthConf = hawor::depthScaleConfidence(s);
-      j.num("depth_scale", depthScale).num("depth_confidence", depthConf).num("depth_spread", s.relativeSpread);
-    }
-    if (args.flag("baseline")) {
-      const hawor::SequenceScale<double> b = hawor::medianScale(d, D, &hand);
-      if (b.ok()) j.num("median_scale", b.scale);
-      hawor::AdaptiveScaleOptions<double> other = aopt;
-      other.sampling = aopt.sampling == hawor::AdaSmSampling::Official ? hawor::AdaSmSampling::SlamDepth
-                                                                       : hawor::AdaSmSampling::Official;
-      other.minPixels = other.sampling == hawor::AdaSmSampling::Official ? 10 : 30;
-      if (other.sampling == hawor::AdaSmSampling::Official) other.combine = hawor::KeyframeCombine::Median;
-      const hawor::SequenceScale<double> o = hawor::adaptiveScale(d, D, &hand, other);
-      if (o.ok()) j.num(other.sampling == hawor::AdaSmSampling::Official ? "official_scale" : "slam_depth_scale", o.scale);
-      hawor::AdaptiveScaleOptions<double> swap = aopt;
-      swap.combine = aopt.combine == hawor::KeyframeCombine::Huber ? hawor::KeyframeCombine::Median
-                                                                   : hawor::KeyframeCombine::Huber;
-      const hawor::SequenceScale<double> c = hawor::adaptiveScale(d, D, &hand, swap);
-      if (c.ok()) j.num(swap.combine == hawor::KeyframeCombine::Huber ? "huber_combine_scale" : "median_combine_scale", c.scale);
+      keyframes.push_back(hawor::pairKeyframeDepths(kuv.data(), kdepth.data(), kdepth.size(), m.data(), W, H,
+                                                    haveMask ? mask.data.data() : nullptr));
     }
   }
+  // Hand cue: the wrists (joint 0) of the camera-frame hands.
+  std::vector<hawor::HandTrack<double>> tracks;
   if (args.has("hands")) {
     const std::string hp = args.required("hands");
     const hawor::Npz z = hawor::Npz::read(hp);
-    std::vector<hawor::HandTrack<double>> tracks;
     for (const std::string prefix : {"left_", "right_", ""}) {
       if (!z.has(prefix + "joints_cam")) continue;
       const hawor::NpyArray& a = z.get(prefix + "joints_cam");
@@ -190,23 +166,41 @@ int cmdScale(int argc, char** argv) {
       if (prefix.empty()) break;
     }
     if (tracks.empty()) throw hawor::Error(hp + ": no [left_|right_]joints_cam array");
-    std::vector<hawor::SE3<double>> poses;
-    for (const auto& p : traj) poses.emplace_back(hawor::SO3<double>::fromQuaternion(Eigen::Quaterniond(p.q)), hawor::Vec3<double>(p.p));
-    hawor::HandScaleOptions<double> hopt;
-    if (traj.size() >= 2 && traj[1].t > traj[0].t) {
-      const double fps = 1.0 / (traj[1].t - traj[0].t);
-      hopt.smoothness.fps = fps;
-      hopt.hold.window = std::max(5, static_cast<int>(std::lround(0.5 * fps)));  // half a second
-    }
-    const hawor::HandScaleResult<double> h = hawor::handAnchoredScale(poses, tracks, hopt);
-    j.str("hand_cue", h.method).integer("hand_residuals", h.residuals).integer("hand_rest", h.restFrames);
-    if (h.ok()) {
-      handScale = h.scale;
-      handConf = h.confidence;
-      j.num("hand_scale", handScale).num("hand_confidence", handConf);
-    }
   }
-  const hawor::FusedScale<double> fused = hawor::fuseScales(depthScale, depthConf, handScale, handConf);
+  std::vector<hawor::SE3<double>> poses;
+  for (const auto& p : traj) poses.emplace_back(hawor::SO3<double>::fromQuaternion(Eigen::Quaterniond(p.q)), hawor::Vec3<double>(p.p));
+
+  const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, tracks, opt);
+  JsonObject j;
+  if (r.depthRan) {
+    j.integer("keyframes", r.depth.keyframes).integer("keyframes_fitted", r.depth.fitted);
+    if (r.depth.ok())
+      j.num("depth_scale", r.depth.scale).num("depth_confidence", r.depthConfidence).num("depth_spread", r.depth.relativeSpread);
+  }
+  if (r.depthRan && args.flag("baseline")) {
+    std::vector<std::vector<double>> d, D;
+    std::vector<std::vector<char>> hand;
+    for (const auto& k : keyframes) d.push_back(k.slam), D.push_back(k.metric), hand.push_back(k.masked);
+    const hawor::SequenceScale<double> b = hawor::medianScale(d, D, &hand);
+    if (b.ok()) j.num("median_scale", b.scale);
+    hawor::AdaptiveScaleOptions<double> other = aopt;
+    other.sampling = aopt.sampling == hawor::AdaSmSampling::Official ? hawor::AdaSmSampling::SlamDepth
+                                                                     : hawor::AdaSmSampling::Official;
+    other.minPixels = other.sampling == hawor::AdaSmSampling::Official ? 10 : 30;
+    if (other.sampling == hawor::AdaSmSampling::Official) other.combine = hawor::KeyframeCombine::Median;
+    const hawor::SequenceScale<double> o = hawor::adaptiveScale(d, D, &hand, other);
+    if (o.ok()) j.num(other.sampling == hawor::AdaSmSampling::Official ? "official_scale" : "slam_depth_scale", o.scale);
+    hawor::AdaptiveScaleOptions<double> swap = aopt;
+    swap.combine = aopt.combine == hawor::KeyframeCombine::Huber ? hawor::KeyframeCombine::Median
+                                                                 : hawor::KeyframeCombine::Huber;
+    const hawor::SequenceScale<double> c = hawor::adaptiveScale(d, D, &hand, swap);
+    if (c.ok()) j.num(swap.combine == hawor::KeyframeCombine::Huber ? "huber_combine_scale" : "median_combine_scale", c.scale);
+  }
+  if (r.handsRan) {
+    j.str("hand_cue", r.hands.method).integer("hand_residuals", r.hands.residuals).integer("hand_rest", r.hands.restFrames);
+    if (r.hands.ok()) j.num("hand_scale", r.hands.scale).num("hand_confidence", r.hands.confidence);
+  }
+  const hawor::FusedScale<double>& fused = r.fused;
   if (!fused.ok()) {
     throw hawor::Error(
         "no metric scale could be estimated: no keyframe had usable metric depth, and no hand held still while the "
