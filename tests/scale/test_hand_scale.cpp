@@ -183,3 +183,26 @@ TEST_CASE("hand-anchored scale: degenerate input", "[scale]") {
     CHECK_THROWS_AS(hawor::handAnchoredScale(s.slam, s.hands), hawor::Error);
   }
 }
+
+TEST_CASE("hand hold scale: noise-free input on a straight camera path still gives the hold", "[scale]") {
+  // Every second difference of x is 0 here (a still hand, a camera on a line at constant speed):
+  // the noise estimate is 0 and only its floor (HandHoldOptions::minNoise) keeps the cue alive.
+  const double alpha = 0.52;
+  std::vector<hawor::SE3<double>> slam;
+  std::vector<hawor::HandTrack<double>> hands(1);
+  const Eigen::Vector3d p(0.3, 0.4, 0.9);
+  for (int t = 0; t < 90; ++t) {
+    const Eigen::Vector3d cw(0.01 * t, 0.002 * t, 1.5);
+    const hawor::SE3<double> Twc(hawor::SO3<double>::exp(Eigen::Vector3d(0.1, 0.2, 0.05)), cw);
+    slam.emplace_back(hawor::SO3<double>::exp(Eigen::Vector3d(0.1, 0.2, 0.05)), hawor::Vec3<double>(cw / alpha));
+    hands[0].positionCam.push_back(Twc.inverse() * p);
+    hands[0].valid.push_back(1);
+  }
+  const hawor::HandScaleResult<double> r = hawor::handAnchoredScale(slam, hands);
+  REQUIRE(r.ok());
+  CHECK(r.method == "holds");
+  CHECK(r.scale == Approx(alpha).epsilon(1e-3));
+  hawor::HandHoldOptions<double> bad;
+  bad.minNoise = 0;
+  CHECK_THROWS_AS(hawor::handHoldScale(slam, hands, bad), hawor::Error);
+}

@@ -8,7 +8,7 @@
 //   RSS_w(α) = Σ_t |x̃_t + α·c̃_t|² = xx_w + 2α·xc_w + α²·cc_w,   x̃ = x − x̄,  c̃ = c − c̄,
 // a quadratic in α, and q_w(α) = RSS_w(α) / (σ²·(3W − 3)) ≈ 1 for a still hand at the right α
 // (σ: the per-axis noise of x, estimated from the data as 1.4826·median|Δ²x| / √6, the MAD of
-// second differences). Holds are not known in advance, so α is the consensus of all windows:
+// second differences, floored at minNoise). Holds are not known in advance, so α is the consensus of all windows:
 //   α₀ = argmin_α Σ_w min(q_w(α), τ)            (a window explains at most τ; log-spaced scan)
 // which makes as many windows still as possible; windows in which the camera hardly moves cost
 // the same at every α and do not matter. Then, over the windows still at α (q_w < τ), the
@@ -38,6 +38,10 @@ struct HandHoldOptions {
   Scalar scanDecades = Scalar(3); ///< scan α_ref·10^±decades, α_ref = √(Σ xx / Σ cc)
   int refinements = 3;
   int minStillWindows = 3;
+  /// Floor of σ (metres): well below a fitted hand's noise (1–2 mm or more), so it never binds on
+  /// real data, but noise-free input (synthetic, a camera moving on a straight line: every
+  /// second difference of x is 0) still gets a scale instead of σ = 0.
+  Scalar minNoise = Scalar(5e-4);
 };
 
 /// The hold scale (file comment). Throws on mismatched lengths or invalid options; the result is
@@ -47,8 +51,8 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
                                       const HandHoldOptions<Scalar>& opt = {}) {
   scale_detail::checkTracks("handHoldScale", T_w_c, hands);
   if (opt.window < 3 || !(opt.tau > Scalar(0)) || opt.scanSamples < 10 || !(opt.scanDecades > Scalar(0)) ||
-      opt.refinements < 0 || opt.minStillWindows < 1) {
-    throw Error("handHoldScale: invalid options (window >= 3, tau > 0, scanSamples >= 10)");
+      opt.refinements < 0 || opt.minStillWindows < 1 || !(opt.minNoise > Scalar(0))) {
+    throw Error("handHoldScale: invalid options (window >= 3, tau > 0, scanSamples >= 10, minNoise > 0)");
   }
   HandScaleResult<Scalar> res;
   res.method = "holds";
@@ -93,7 +97,7 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   res.residuals = static_cast<int>(wins.size());
   if (wins.empty() || d2.size() < 10) return res;
   std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2), d2.end());
-  const double sigma = 1.4826 * d2[d2.size() / 2] / std::sqrt(6.0);
+  const double sigma = std::max(1.4826 * d2[d2.size() / 2] / std::sqrt(6.0), double(opt.minNoise));
   double sxx = 0, scc = 0;
   for (const Win& w : wins) sxx += w.xx, scc += w.cc;
   if (!(sigma > 0) || !(scc > 0) || !(sxx > 0)) return res;
