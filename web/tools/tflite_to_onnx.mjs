@@ -29,7 +29,11 @@
 //     'asymmetric' (x_in = x / scale).
 //   PAD: constant zeros; MEAN: ReduceMean over the given axes; PRELU: y = x < 0 ? a x : x.
 
-import { OnnxGraph, attr } from './onnx_builder.mjs';
+import { readFileSync, writeFileSync } from 'node:fs';
+import { resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { OnnxGraph } from './onnx_builder.mjs';
+import { readTflite } from './tflite_reader.mjs';
 
 export const SUPPORTED_OPS = Object.freeze(['ADD', 'CONCATENATION', 'CONV_2D', 'DEPTHWISE_CONV_2D', 'DEQUANTIZE',
   'FULLY_CONNECTED', 'LOGISTIC', 'MAX_POOL_2D', 'RESHAPE', 'RESIZE_BILINEAR', 'PAD', 'MEAN', 'PRELU']);
@@ -514,3 +518,24 @@ export function tfliteToOnnx(model, { weights = 'float16', name = 'tflite', opse
   const bytes = g.toBytes({ opsetVersion, docString: `converted from TFLite by hawor tflite_to_onnx.mjs (weights ${weights})` });
   return { bytes, inputs, outputs, opCounts };
 }
+
+// CLI: node web/tools/tflite_to_onnx.mjs IN.tflite OUT.onnx [--fp32]
+function main(argv) {
+  const files = argv.filter((a) => !a.startsWith('--'));
+  const flags = argv.filter((a) => a.startsWith('--'));
+  if (files.length !== 2 || flags.some((f) => f !== '--fp32')) {
+    process.stderr.write('usage: node web/tools/tflite_to_onnx.mjs IN.tflite OUT.onnx [--fp32]\n');
+    return 2;
+  }
+  try {
+    const conv = tfliteToOnnx(readTflite(new Uint8Array(readFileSync(files[0]))), { weights: flags.includes('--fp32') ? 'float32' : 'float16' });
+    writeFileSync(files[1], conv.bytes);
+    process.stdout.write(`${JSON.stringify({ out: files[1], bytes: conv.bytes.length, inputs: conv.inputs, outputs: conv.outputs, opCounts: conv.opCounts })}\n`);
+    return 0;
+  } catch (e) {
+    process.stderr.write(`tflite_to_onnx: ${files[0]}: ${e.message}\n`);
+    return 1;
+  }
+}
+
+if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.url)) process.exitCode = main(process.argv.slice(2));
