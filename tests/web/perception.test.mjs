@@ -144,6 +144,13 @@ test('rotated crop: imageToCrop inverts cropToImage, and the crop samples a line
   assert.deepEqual(cropImage({ width: W, height: H, data: rgb, channels: 3 }, roi, 8), cropImage(image, roi, 8));
   const far = cropImage(image, { cx: -100, cy: -100, w: 10, h: 10, rotation: 0 }, 4);
   assert.ok(far.every((v) => v === 0));
+  // replicate: far above-left reads the corner pixel (1, 2, 0)
+  const rep = cropImage(image, { cx: -100, cy: -100, w: 10, h: 10, rotation: 0 }, 4, 4, undefined, 'replicate');
+  for (let p = 0; p < 16; ++p) assert.deepEqual(Array.from(rep.subarray(3 * p, 3 * p + 3), (v) => Math.round(v * 255)), [1, 2, 0]);
+  // replicate on the right edge column: x clamps to W - 1, y still interpolates
+  const edge = cropImage(image, { cx: W + 20, cy: 20.25, w: 1, h: 1, rotation: 0 }, 1, 1, undefined, 'replicate');
+  near(edge[0] * 255, 2 * (W - 1) + 1, 1e-4, 'R at the edge'); near(edge[1] * 255, 3 * 20.25 + 2, 1e-4, 'G at the edge');
+  assert.throws(() => cropImage(image, roi, 8, 8, undefined, 'mirror'), /border 'mirror'/);
   assert.throws(() => cropImage({ width: W, height: H, data: rgb, channels: 4 }, roi, 8), /bytes for a 64x48x4 image/);
 });
 
@@ -151,7 +158,7 @@ test('landmarks: crop pixels -> image pixels, world landmarks rotated with the R
   const roi = { cx: 500, cy: 300, w: 200, h: 200, rotation: Math.PI / 2 };
   const Identity = new Float32Array(63);
   const Identity_3 = new Float32Array(63);
-  Identity.set([112, 0, 22.4], 0); // top centre of the crop, z = 0.1 crop widths
+  Identity.set([112, 0, 8.96], 0); // top centre of the crop, z = 8.96 / 224 / 0.4 = 0.1 crop widths
   Identity.set([224, 112, 0], 3); // right edge centre
   Identity_3.set([0.05, 0, 0.01], 0); // 5 cm along the crop's x
   const out = decodeLandmarks({ Identity, Identity_1: new Float32Array([0.97]), Identity_2: new Float32Array([0.8]), Identity_3 }, roi);

@@ -53,11 +53,15 @@ export function letterboxRoi(width, height) {
 
 /**
  * Samples an N x N (or outW x outH) crop of `image` over `roi`, bilinearly, into NHWC float RGB
- * in 0..1 (what the MediaPipe networks take). Outside the image reads as black (zero border).
+ * in 0..1 (what the MediaPipe networks take). Outside the image: `border` 'zero' reads black
+ * (MediaPipe's palm letterbox), 'replicate' the nearest edge pixel (MediaPipe's default, used for
+ * the landmark crops).
  * @param image {width, height, data: Uint8Array | Uint8ClampedArray, channels: 3 (RGB) or 4 (RGBA)}
  * @param out   optional Float32Array of outW * outH * 3 to fill
  */
-export function cropImage(image, roi, outW, outH = outW, out = new Float32Array(outW * outH * 3)) {
+export function cropImage(image, roi, outW, outH = outW, out = new Float32Array(outW * outH * 3), border = 'zero') {
+  if (border !== 'zero' && border !== 'replicate') throw new Error(`cropImage: border '${border}' (zero or replicate)`);
+  const replicate = border === 'replicate';
   const { width: W, height: H, data } = image;
   const ch = image.channels ?? 4;
   if (ch !== 3 && ch !== 4) throw new Error(`cropImage: ${ch} channels (3 = RGB or 4 = RGBA expected)`);
@@ -89,9 +93,13 @@ export function cropImage(image, roi, outW, outH = outW, out = new Float32Array(
       let b = 0;
       // the four neighbours, each skipped when outside (zero border)
       for (let q = 0; q < 4; ++q) {
-        const xx = xf + (q & 1);
-        const yy = yf + (q >> 1);
-        if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+        let xx = xf + (q & 1);
+        let yy = yf + (q >> 1);
+        if (xx < 0 || yy < 0 || xx >= W || yy >= H) {
+          if (!replicate) continue;
+          xx = Math.min(Math.max(xx, 0), W - 1);
+          yy = Math.min(Math.max(yy, 0), H - 1);
+        }
         const wgt = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
         if (wgt === 0) continue;
         const p = (yy * W + xx) * ch;

@@ -45,7 +45,7 @@ export class HandTracker {
   async detectPalms(image) {
     const S = PALM_INPUT_SIZE;
     const roi = letterboxRoi(image.width, image.height);
-    cropImage(image, roi, S, S, this.palmInput);
+    cropImage(image, roi, S, S, this.palmInput, 'zero'); // letterbox bars are black
     const feeds = { [this.palmSession.inputNames[0]]: new this.ort.Tensor('float32', this.palmInput, [1, S, S, 3]) };
     const out = await this.palmSession.run(feeds);
     this.stats.palmRuns += 1;
@@ -56,7 +56,7 @@ export class HandTracker {
   /** The landmark network on one ROI (see landmarks.mjs for the result). */
   async landmarks(image, roi) {
     const S = LANDMARK_INPUT_SIZE;
-    cropImage(image, roi, S, S, this.landmarkInput);
+    cropImage(image, roi, S, S, this.landmarkInput, 'replicate'); // MediaPipe's default border
     const feeds = { [this.landmarkSession.inputNames[0]]: new this.ort.Tensor('float32', this.landmarkInput, [1, S, S, 3]) };
     const out = await this.landmarkSession.run(feeds);
     this.stats.landmarkRuns += 1;

@@ -3,7 +3,7 @@
 //
 // Network outputs (names as in the .tflite, kept by the converter):
 //   Identity   [1, 63]  21 x (x, y, z): x, y in crop pixels (0..224 edge to edge), z relative
-//                       depth in the same units (smaller = nearer the camera), about the wrist;
+//                       depth (smaller = nearer the camera) about the wrist, in crop pixels x 0.4;
 //   Identity_1 [1, 1]   hand presence, a probability (the graph ends in a LOGISTIC);
 //   Identity_2 [1, 1]   handedness s: MediaPipe labels it with handedness.txt ("Left", "Right")
 //                       as a binary classifier, class 0 ("Left") scoring s, class 1 ("Right")
@@ -17,6 +17,7 @@ import { cropToImage, transformRoi, normalizeRadians } from './geometry.mjs';
 
 export const LANDMARK_INPUT_SIZE = 224;
 export const NUM_LANDMARKS = 21;
+const Z_NORMALIZE = 0.4;
 
 /**
  * Decodes one landmark-network run on the crop of `roi`.
@@ -38,7 +39,9 @@ export function decodeLandmarks(outputs, roi, { mirrored = false } = {}) {
     const [x, y] = cropToImage(roi, lm[3 * k] / S - 0.5, lm[3 * k + 1] / S - 0.5);
     landmarks[3 * k] = x;
     landmarks[3 * k + 1] = y;
-    landmarks[3 * k + 2] = (lm[3 * k + 2] / S) * roi.w; // MediaPipe: z scales with the ROI width
+    // MediaPipe: z / 224 / 0.4 (normalize_z, "the Z distribution of the training data"), then
+    // times the ROI width
+    landmarks[3 * k + 2] = (lm[3 * k + 2] / S / Z_NORMALIZE) * roi.w;
   }
   // world landmarks: the crop's axes are the image axes rotated by r
   const c = Math.cos(roi.rotation);
