@@ -37,7 +37,6 @@ function act(v, a) {
     case 'RELU': return v.map((x) => Math.max(0, x));
     case 'RELU6': return v.map((x) => Math.min(6, Math.max(0, x)));
     case 'RELU_N1_TO_1': return v.map((x) => Math.min(1, Math.max(-1, x)));
-    case 'TANH': return v.map(Math.tanh);
     default: throw new Error(`ref: activation ${a}`);
   }
 }

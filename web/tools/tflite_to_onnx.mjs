@@ -23,7 +23,7 @@
 //   CONV_2D filter [O, KH, KW, I] -> ONNX [O, I, KH, KW]; DEPTHWISE_CONV_2D filter
 //     [1, KH, KW, C*m] -> [C*m, 1, KH, KW] with group = C (output channel c*m + j reads input c
 //     in both); FULLY_CONNECTED weights [out, in]: y = x W^T + b on x flattened to [-1, in].
-//   fused activations: RELU -> Relu, RELU6 -> Clip(0, 6), RELU_N1_TO_1 -> Clip(-1, 1), TANH.
+//   fused activations: RELU -> Relu, RELU6 -> Clip(0, 6), RELU_N1_TO_1 -> Clip(-1, 1).
 //   RESIZE_BILINEAR: align_corners -> 'align_corners', half_pixel_centers -> 'half_pixel'
 //     (x_in = (x + 0.5) / scale - 0.5, clamped to the edge, as TFLite clamps), else
 //     'asymmetric' (x_in = x / scale).
@@ -207,7 +207,6 @@ export function tfliteToOnnx(model, { weights = 'float16', name = 'tflite', opse
     if (a === 'NONE') return x;
     const y = fresh('act');
     if (a === 'RELU') g.addNode('Relu', [x], [y]);
-    else if (a === 'TANH') g.addNode('Tanh', [x], [y]);
     else if (a === 'RELU6' || a === 'RELU_N1_TO_1') {
       const [lo, hi] = a === 'RELU6' ? [0, 6] : [-1, 1];
       const lon = fresh('clip_lo');
@@ -215,7 +214,11 @@ export function tfliteToOnnx(model, { weights = 'float16', name = 'tflite', opse
       g.addInitializer(lon, [], new Float32Array([lo]));
       g.addInitializer(hin, [], new Float32Array([hi]));
       g.addNode('Clip', [x, lon, hin], [y]);
-    } else throw new Error(`${what}: fused activation ${a} is not supported`);
+    } else {
+      // TANH / SIGN_BIT exist in the enum, but TFLite's kernels refuse (FULLY_CONNECTED) or
+      // ignore (CONV_2D, ADD) them: no meaning to convert
+      throw new Error(`${what}: fused activation ${a} is not supported (TFLite's kernels apply only RELU, RELU6, RELU_N1_TO_1)`);
+    }
     return y;
   }
 
