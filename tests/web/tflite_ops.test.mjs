@@ -159,3 +159,13 @@ test('the writer round-trips through the reader: options, shapes, constants', ()
   assert.deepEqual(m.inputs, [0]);
   assert.deepEqual(m.outputs, [y]);
 });
+
+test('DEQUANTIZE of anything but an fp16 constant is refused with the operator named', () => {
+  const g = graph();
+  const x = g.t([1, 2, 2, 1]);
+  const q = g.t([1, 1, 1, 1], { type: 'int32', data: Int32Array.from([3]) });
+  const w = g.op('DEQUANTIZE', [q], [1, 1, 1, 1]);
+  const y = g.op('ADD', [x, w], [1, 2, 2, 1]);
+  const m = readTflite(writeTflite({ tensors: g.tensors, inputs: [x], outputs: [y], ops: g.ops }));
+  assert.throws(() => tfliteToOnnx(m), /operator 0 \(DEQUANTIZE\): input 't1' is int32; only DEQUANTIZE of fp16 constants/);
+});

@@ -269,13 +269,9 @@ export function tfliteToOnnx(model, { weights = 'float16', name = 'tflite', opse
           // fp16 weights: a float constant from here on, kept as fp16 bits until written.
           if (count(src.shape) !== count(outT.shape)) throw new Error(`${what}: ${fmt(src.shape)} -> ${fmt(outT.shape)} changes the element count`);
           consts.set(out, { shape: outT.shape, f16: c.f16 });
-        } else if (src.type === 'float16' && values.has(ins[0])) {
-          const v = values.get(ins[0]);
-          const y = fresh(`t${out}`);
-          g.addNode('Cast', [v.name], [y], { to: 1 });
-          setValue(out, y, v.layout);
         } else {
-          throw new Error(`${what}: input '${src.name}' is ${src.type}${src.quantized ? ' (quantized)' : ''}; only fp16 -> fp32 DEQUANTIZE is supported`);
+          // (a runtime fp16 value cannot occur: inputs and every op output are float32)
+          throw new Error(`${what}: input '${src.name}' is ${src.type}${src.quantized ? ' (quantized)' : ''}${c ? '' : ', not a constant'}; only DEQUANTIZE of fp16 constants is supported`);
         }
         break;
       }
