@@ -115,6 +115,7 @@ export async function tfjsModel(name) {
   const tf = await import('@tensorflow/tfjs-core');
   await import('@tensorflow/tfjs-backend-cpu');
   const { loadGraphModel } = await import('@tensorflow/tfjs-converter');
+  tf.env().set('PROD', true); // silences the "install tfjs-node" banner (backend_util.warn)
   await tf.setBackend('cpu');
   const spec = JSON.parse(readFileSync(join(humanModelsDir, `${name}.json`), 'utf8'));
   const bins = spec.weightsManifest.flatMap((g) => g.paths.map((p) => readFileSync(join(humanModelsDir, p))));
