@@ -237,6 +237,12 @@ test('tracker on the clip: finds both hands, tracks them without the detector, m
     assert.deepEqual(next.map((h) => h.source), ['track', 'track']);
   }
   assert.equal(tracker.stats.palmRuns, palmRuns);
+  // two tracks on the same hand merge into one (the other hand is found again by the detector)
+  const right = byX[1];
+  tracker.tracked = [right.roi, { ...right.roi, cx: right.roi.cx + 10 }];
+  const merged = await tracker.track(f20);
+  assert.equal(merged.length, 2, 'one track per hand');
+  assert.deepEqual(merged.map((h) => h.source).sort(), ['detect', 'track']);
   // a crop without a hand (the floor, top left of frame 20) has a low presence
   const empty = await tracker.landmarks(f20, { cx: 150, cy: 150, w: 250, h: 250, rotation: 0 });
   assert.ok(empty.presence < 0.2, `presence on the floor ${empty.presence}`);

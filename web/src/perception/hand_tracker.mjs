@@ -68,19 +68,25 @@ export class HandTracker {
   reset() { this.tracked = []; }
 
   /**
-   * One video frame: landmarks for each tracked hand; the detector only if fewer than maxHands
-   * remain, its palms added where they do not overlap a tracked hand (IoU of the ROIs' bounding
-   * squares < 0.5). Hands below minPresence are dropped. Returns [{...decodeLandmarks, source:
+   * One video frame: landmarks for each tracked hand (tracks that converged on one hand merged);
+   * the detector only if fewer than maxHands remain, its palms added where they do not overlap a
+   * tracked hand (IoU of the ROIs' bounding squares < 0.5). Hands below minPresence are dropped. Returns [{...decodeLandmarks, source:
    * 'track' | 'detect'}] and keeps their next ROIs.
    */
   async track(image) {
+    const box = (r) => ({ cx: r.cx, cy: r.cy, w: Math.max(r.w, r.h), h: Math.max(r.w, r.h) });
     const hands = [];
     for (const roi of this.tracked) {
       const h = await this.landmarks(image, roi);
-      if (h.presence >= this.minPresence) hands.push({ ...h, source: 'track' });
+      if (h.presence < this.minPresence) continue;
+      // two tracks that converged on one hand (MediaPipe associates them the same way, IoU > 0.5
+      // of the next ROIs): keep the more confident one
+      const next = box(roiFromLandmarks(h.landmarks));
+      const dup = hands.findIndex((o) => iou(box(roiFromLandmarks(o.landmarks)), next) > 0.5);
+      if (dup < 0) hands.push({ ...h, source: 'track' });
+      else if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
     }
     if (hands.length < this.maxHands) {
-      const box = (r) => ({ cx: r.cx, cy: r.cy, w: Math.max(r.w, r.h), h: Math.max(r.w, r.h) });
       for (const palm of await this.detectPalms(image)) {
         if (hands.length >= this.maxHands) break;
         const roi = roiFromPalm(palm);
