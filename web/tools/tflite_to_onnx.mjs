@@ -23,6 +23,7 @@
 //   CONV_2D filter [O, KH, KW, I] -> ONNX [O, I, KH, KW]; DEPTHWISE_CONV_2D filter
 //     [1, KH, KW, C*m] -> [C*m, 1, KH, KW] with group = C (output channel c*m + j reads input c
 //     in both); FULLY_CONNECTED weights [out, in]: y = x W^T + b on x flattened to [-1, in].
+//     An omitted bias (input -1) is zero.
 //   fused activations: RELU -> Relu, RELU6 -> Clip(0, 6), RELU_N1_TO_1 -> Clip(-1, 1).
 //   RESIZE_BILINEAR: align_corners -> 'align_corners', half_pixel_centers -> 'half_pixel'
 //     (x_in = (x + 0.5) / scale - 0.5, clamped to the edge, as TFLite clamps), else
