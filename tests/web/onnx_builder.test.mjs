@@ -226,3 +226,16 @@ test('int64 initializers and integer outputs round-trip', async () => {
   assert.deepEqual(Array.from(res.y.data), [-4n, (1n << 40n) + 2n, 4n]);
   await session.release();
 });
+
+test('float16 initializers (Uint16Array bit patterns) load and Cast to the exact float values', async () => {
+  // 1, -2, 65504 (largest half), 2^-24 (smallest subnormal), 1/3 rounded to half
+  const bits = new Uint16Array([0x3c00, 0xc000, 0x7bff, 0x0001, 0x3555]);
+  const g = new OnnxGraph('half');
+  g.addInitializer('h', [5], bits, 'float16');
+  g.addNode('Cast', ['h'], ['y'], { to: 1 });
+  g.addOutput('y', 'float32', [5]);
+  const s = await ort.InferenceSession.create(g.toBytes());
+  const { y } = await s.run({});
+  assert.deepEqual(Array.from(y.data), [1, -2, 65504, 2 ** -24, 0.333251953125]);
+  assert.throws(() => new OnnxGraph().addInitializer('u', [1], new Uint16Array(1)), /Uint16Array needs type float16 or uint16/);
+});

@@ -158,7 +158,8 @@ function dataTypeOf(name) {
 // Tensors
 
 /** A constant tensor: dims (array of non-negative integers) and its data, row-major.
- *  Float32Array -> float32, BigInt64Array -> int64, Int32Array -> int32, Uint8Array -> uint8;
+ *  Float32Array -> float32, BigInt64Array -> int64, Int32Array -> int32, Uint8Array -> uint8,
+ *  Uint16Array -> float16 (half-float bit patterns) or uint16, as `type` says;
  *  a plain array needs `type` ('float32', 'int64', 'int32', 'uint8', 'bool'). */
 function makeTensor(name, dims, data, type) {
   if (!Array.isArray(dims)) throw new Error(`onnx_builder: tensor '${name}': dims must be an array`);
@@ -171,6 +172,11 @@ function makeTensor(name, dims, data, type) {
   else if (data instanceof BigInt64Array) { typed = data; type = type ?? 'int64'; }
   else if (data instanceof Int32Array) { typed = data; type = type ?? 'int32'; }
   else if (data instanceof Uint8Array) { typed = data; type = type ?? 'uint8'; }
+  else if (data instanceof Uint16Array) {
+    // 16-bit words: IEEE half floats (bit patterns) or uint16; which one must be said.
+    if (type !== 'float16' && type !== 'uint16') throw new Error(`onnx_builder: tensor '${name}': a Uint16Array needs type float16 or uint16`);
+    typed = data;
+  }
   else if (Array.isArray(data)) {
     if (type === 'float32') typed = Float32Array.from(data);
     else if (type === 'int64') typed = BigInt64Array.from(data, (v) => BigInt(v));
@@ -178,7 +184,7 @@ function makeTensor(name, dims, data, type) {
     else if (type === 'uint8' || type === 'bool') typed = Uint8Array.from(data, (v) => Number(v));
     else throw new Error(`onnx_builder: tensor '${name}': a plain array needs type float32, int64, int32, uint8 or bool`);
   } else {
-    throw new Error(`onnx_builder: tensor '${name}': data must be a Float32Array, BigInt64Array, Int32Array, Uint8Array or an array`);
+    throw new Error(`onnx_builder: tensor '${name}': data must be a Float32Array, BigInt64Array, Int32Array, Uint8Array, Uint16Array or an array`);
   }
   if (typed.length !== count) {
     throw new Error(`onnx_builder: tensor '${name}': ${typed.length} values for dims [${dims.join(', ')}] (${count} expected)`);
