@@ -524,21 +524,23 @@ class MonoSlam {
       fr.rotationKnown = false;
     }
     fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
-    // Rolling reference: any of the last initMaxGap frames (their tracks are in the per-frame
-    // observations, their rotations from the rays) can pair with this one: the oldest sharing
+    // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
+    // tracks); in turn mode also any of the last initMaxGap frames (their tracks are in the
+    // per-frame observations, their rotations from the rays): the oldest of them sharing
     // initMinTracks tracks. During a head turn the tracks live only a few frames, and a fixed
     // reference would lose them all before the neck's translation gives parallax.
     fr.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
-    const int oldest = std::max(segmentStart_, f - opt_.initMaxGap);
-    if (f - opt_.initMaxGap - 1 >= 0) frames_[static_cast<std::size_t>(f - opt_.initMaxGap - 1)].mask = CoarseMask();
-    int bestG = -1;
+    const int window = f - opt_.initMaxGap;
+    if (window - 1 >= 0 && window - 1 != refFrame_) frames_[static_cast<std::size_t>(window - 1)].mask = CoarseMask();
+    const int oldest = std::max(segmentStart_, std::min(refFrame_, window));
+    int bestG = -1, refAlive = 0;
     float bestFlow = -1;
     std::vector<int> bestIdx, bestOther;
     std::vector<int> idx, other;
     std::vector<float> flow;
     for (int g = f - 1; g >= oldest; --g) {
       const Frame& rf = frames_[static_cast<std::size_t>(g)];
-      if (!rf.rotationKnown) continue;
+      if (g != refFrame_ && (!turning_ || g < window || !rf.rotationKnown)) continue;
       // Common tracks: both observation lists are sorted by track id (ids only grow).
       idx.clear(), other.clear(), flow.clear();
       std::size_t a = 0;
@@ -546,6 +548,7 @@ class MonoSlam {
         while (a < rf.obsTrack.size() && rf.obsTrack[a] < tracks_[i].id) ++a;
         if (a < rf.obsTrack.size() && rf.obsTrack[a] == tracks_[i].id) idx.push_back(static_cast<int>(i)), other.push_back(static_cast<int>(a));
       }
+      if (g == refFrame_) refAlive = static_cast<int>(idx.size());
       if (static_cast<int>(idx.size()) < opt_.initMinTracks) continue;
       // Rotation-compensated flow: where the reference ray lands under the rotation alone.
       const Mat3<Scalar> Rcr = fr.T.rotationMatrix().transpose() * rf.T.rotationMatrix();
@@ -588,6 +591,7 @@ class MonoSlam {
                  " parallax " + std::to_string(double(tv.medianParallaxDeg)));
       }
       if (tv.ok()) {
+        if (bestG != refFrame_ && refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
         refFrame_ = bestG;
         refMask_ = rf.mask;
         for (Track& t : tracks_) t.fromRef = false;
@@ -601,9 +605,18 @@ class MonoSlam {
         return;
       }
     }
-    // Keep the view seeded: new corners when no recent frame shares enough tracks with this one
-    // (this frame becomes a reference), and in turn mode whenever the tracks thin out.
-    if (bestG < 0 || (turning_ && static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10)) replenish();
+    // Too few reference tracks left: this frame becomes the reference (new corners first). In
+    // turn mode new corners also whenever the tracks thin out.
+    const int refTracks = static_cast<int>(frames_[static_cast<std::size_t>(refFrame_)].obsTrack.size());
+    if (refAlive < std::max(opt_.initMinTracks, refTracks / 4)) {
+      if (opt_.log) {
+        opt_.log("frame " + std::to_string(f) + ": new initialisation reference (" + std::to_string(refAlive) + " tracks left)");
+      }
+      if (refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
+      setReference(f);
+    } else if (turning_ && static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10) {
+      replenish();
+    }
   }
 
   void buildMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx) {
