@@ -45,7 +45,8 @@
 // monocular scale (the first baseline is 1 in the map's units); per-keyframe sparse depths
 // (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (DESIGN §6).
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
-// a track) and, per keyframe, a 1/4-resolution mask bitmap; no images are kept.
+// a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
+// the last initMaxGap frames while no map exists); no images are kept.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -303,7 +304,7 @@ class MonoSlam {
   /// pyramids and scratch buffers.
   std::size_t sequenceBytes() const {
     std::size_t b = frames_.size() * sizeof(Frame);
-    for (const Frame& f : frames_) b += f.obsTrack.capacity() * sizeof(int) + f.obsUv.capacity() * sizeof(Vec2f);
+    for (const Frame& f : frames_) b += f.obsTrack.capacity() * sizeof(int) + f.obsUv.capacity() * sizeof(Vec2f) + f.mask.bytes();
     for (const Keyframe& k : keyframes_) b += sizeof(Keyframe) + k.mask.bytes() + k.points.capacity() * sizeof(int);
     for (const MapPoint& p : points_) b += sizeof(MapPoint) + p.obs.capacity() * sizeof(Obs);
     b += trackPoint_.capacity() * sizeof(int);
