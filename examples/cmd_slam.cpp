@@ -40,7 +40,8 @@ const char* kSlamHelp =
     "                        keyframe flags, PnP inliers and ms, plus totals\n"
     "  --fps F               timestamps (default 30)\n"
     "  --max-frames N        only the first N frames\n"
-    "  --verbose             one line per frame on stderr\n"
+    "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
+    "                        PnP, keyframes, losses)\n"
     "\n"
     "Prints one JSON object: frames, keyframes, tracked, interpolated, lost, relocalised,\n"
     "losses, resets, initialised, median_ms_per_frame, p95_ms_per_frame.\n";
@@ -96,9 +97,10 @@ int cmdSlam(int argc, char** argv) {
   cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
   hawor::SlamOptions<double> opt;
   opt.useMasks = useMasks;
+  const bool verbose = args.flag("verbose");
+  if (verbose) opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };
   hawor::MonoSlam<double> slam(cam, opt);
   std::vector<double> ms;
-  const bool verbose = args.flag("verbose");
   for (std::size_t i = 0; i < names.size(); ++i) {
     const hawor::ImageU8 img = hawor::readImage(dir + "/" + names[i]);
     if (i == 0) {

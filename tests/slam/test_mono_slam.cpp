@@ -114,6 +114,33 @@ TEST_CASE("MonoSlam: walking sequence with hands, accurate up to a similarity", 
   CHECK(close > rel.size() * 8 / 10);
 }
 
+TEST_CASE("MonoSlam: fast head turns, the map is built within the first turn (turn mode)", "[slam][system]") {
+  // fast_turns, seed 1: a fixation (eye still to 2 mm: no parallax), then head turns at frames
+  // ~38-50 and ~70-81 of 60-150 degrees in half a second whose only translation is the 9 cm
+  // neck pivot. Tracks live a few frames in a turn; without the rotation-predicted KLT and the
+  // rolling two-view reference the map waited for a slower turn (frame 123 of the benchmark's
+  // sequence) and every frame before it kept the first position.
+  const Run r = runPreset("fast_turns", 100, true, 1);
+  const int n = static_cast<int>(r.result.poses.size());
+  REQUIRE(n == 100);
+  CHECK(r.result.initialised);
+  int first = n;
+  for (int i = 0; i < n; ++i) {
+    if (r.result.status[static_cast<std::size_t>(i)] == hawor::SlamStatus::Tracked && r.result.keyframe[static_cast<std::size_t>(i)]) {
+      first = i;
+      break;
+    }
+  }
+  INFO("first keyframe at frame " << first);
+  CHECK(first <= 55);
+  CHECK(r.result.count(hawor::SlamStatus::Tracked) >= n / 2);
+  for (const auto& T : r.result.poses) CHECK(T.translation().allFinite());
+  // Loose: the second turn still re-initialises here (see the README's SLAM benchmark).
+  const double ate = ateMetres(r);
+  INFO("ATE " << ate << " m over a path of " << r.path << " m");
+  CHECK(ate < 0.25 * r.path);
+}
+
 TEST_CASE("MonoSlam: bad input gives errors or statuses, never a crash", "[slam][system]") {
   hawor::PinholeCamera<double> cam;
   cam.fx = cam.fy = 200, cam.cx = 159.5, cam.cy = 119.5;

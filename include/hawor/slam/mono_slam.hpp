@@ -5,16 +5,27 @@
 //   1. Gaussian pyramid of the grey image (image_pyramid.hpp); the hand mask, dilated
 //      (hand_mask.hpp).
 //   2. Pyramidal KLT of every live track from the previous frame (klt.hpp), started at the
-//      projection of its map point under a constant-velocity pose prediction (fast head turns).
-//      FRONT-END MASKING: a track that lands on the dilated hand mask is dropped, and no corner
-//      is ever detected there (corners.hpp).
+//      projection of its map point under a constant-velocity pose prediction, the other tracks
+//      at the mean shift of those guesses. FRONT-END MASKING: a track that lands on the dilated
+//      hand mask is dropped, and no corner is ever detected there (corners.hpp).
+//      TURN MODE: while the rotation exceeds turnRateDeg a frame (a fast head turn: up to
+//      20° ≈ 140 px a frame; looking around and walking stay below 3.5°), every track is also
+//      started at its ray rotated by a constant-angular-velocity prediction (the infinite
+//      homography), the rotation coming from the map or, without a map pose, from the rays.
 //   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
 //      between a reference frame and the current one once the median flow is large enough; the
-//      rotation of not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
+//      reference is the oldest of the last initMaxGap frames sharing initMinTracks tracks (their
+//      observations are kept per frame); in turn mode the pair is also tried after
+//      initMinRotationDeg of rotation (the rays' rotation absorbs most of the parallax of the
+//      neck's sideways translation, so the compensated flow understates it). The rotation of
+//      not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
 //      hypothesis) with the position held.
-//      With a map: the pose by P3P-RANSAC + robust LM on the tracks' map points (pnp_ransac.hpp).
+//      With a map: the pose by P3P-RANSAC + robust LM on the tracks' map points (pnp_ransac.hpp);
+//      in turn mode a pose from as few as minTurnInliers points is accepted when its rotation
+//      agrees with the rays' (the map leaves the view faster than new points are made).
 //   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
-//      an absolute count, or after a maximum interval. At a keyframe: new points are triangulated
+//      an absolute count, after a maximum interval, or in turn mode after keyframeMaxRotationDeg
+//      of rotation (new corners only come at keyframes). At a keyframe: new points are triangulated
 //      from tracks seen in two keyframes with enough parallax (triangulation.hpp), a
 //      sliding-window bundle adjustment runs (bundle_adjustment.hpp: LM, Schur complement,
 //      Huber loss) and new corners fill the empty cells of the bucketing grid.
@@ -34,7 +45,8 @@
 // monocular scale (the first baseline is 1 in the map's units); per-keyframe sparse depths
 // (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (DESIGN §6).
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
-// a track) and, per keyframe, a 1/4-resolution mask bitmap; no images are kept.
+// a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
+// the last initMaxGap frames while no map exists); no images are kept.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -95,15 +107,23 @@ struct SlamOptions {
   Scalar initMinFlowPx = Scalar(4);   ///< median rotation-compensated flow before trying
   int initEveryFrames = 3;            ///< frames between two-view attempts
   int initMinTracks = 60;
+  int initMaxGap = 60;                ///< the two-view reference is one of the last this many frames
+  Scalar initMinRotationDeg = Scalar(8);  ///< in turn mode: try after this much rotation (every other frame)
   // Tracking.
   PnPRansacOptions<Scalar> pnp;
   int minInliers = 25;
+  // Turn mode (fast head turns).
+  Scalar turnRateDeg = Scalar(5);     ///< rotation a frame that starts turn mode (walking: < 3.5)
+  int turnHoldFrames = 5;             ///< frames it lasts after the last such increment
+  int minTurnInliers = 10;                       ///< PnP inliers enough when the rays agree (turns)
+  Scalar turnRotationAgreementDeg = Scalar(1);   ///< PnP vs tracked-ray rotation, for that
   int lostFramesBeforeReset = 4;
   // Keyframes and mapping.
   Scalar keyframeInlierRatio = Scalar(0.7);
   int keyframeMinInliers = 60;
   int keyframeMaxInterval = 10;
   int keyframeMinInterval = 3;
+  Scalar keyframeMaxRotationDeg = Scalar(12);  ///< a keyframe after this much rotation (head turns)
   Scalar minTriangulationDeg = Scalar(0.6);
   Scalar maxReprojPx = Scalar(3);
   int windowKeyframes = 7;
@@ -284,7 +304,7 @@ class MonoSlam {
   /// pyramids and scratch buffers.
   std::size_t sequenceBytes() const {
     std::size_t b = frames_.size() * sizeof(Frame);
-    for (const Frame& f : frames_) b += f.obsTrack.capacity() * sizeof(int) + f.obsUv.capacity() * sizeof(Vec2f);
+    for (const Frame& f : frames_) b += f.obsTrack.capacity() * sizeof(int) + f.obsUv.capacity() * sizeof(Vec2f) + f.mask.bytes();
     for (const Keyframe& k : keyframes_) b += sizeof(Keyframe) + k.mask.bytes() + k.points.capacity() * sizeof(int);
     for (const MapPoint& p : points_) b += sizeof(MapPoint) + p.obs.capacity() * sizeof(Obs);
     b += trackPoint_.capacity() * sizeof(int);
@@ -325,6 +345,7 @@ class MonoSlam {
     bool posed = false;        ///< T comes from a map (tracked) rather than a guess
     bool rotationKnown = true; ///< rotation from rays/tracking (false: only interpolate)
     int inliers = 0;
+    CoarseMask mask;           ///< hand mask, kept for the recent frames while initialising
     std::vector<int> obsTrack;
     std::vector<Vec2f> obsUv;
   };
@@ -345,41 +366,69 @@ class MonoSlam {
   }
 
   void trackFeatures(int f) {
-    // Constant-velocity prediction (c2w): T_pred = T_{f-1}·(T_{f-2}⁻¹·T_{f-1}).
+    // Prediction (c2w). Rotation: constant angular velocity, R_pred = R1·(R2ᵀ·R1), from the last
+    // two frames' rotations, known from the map or from the tracked rays (a fast head turn moves
+    // the image by up to 20° ≈ 140 px a frame, far beyond the pyramid's range without a guess).
+    // Translation: constant velocity when both frames have a map pose, else held.
     const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
-    havePrediction_ = false;
-    if (state_ == State::Tracking && f >= 2 && frames_[static_cast<std::size_t>(f - 2)].posed && p1.posed) {
+    const bool rot2 = f >= 2 && frames_[static_cast<std::size_t>(f - 2)].rotationKnown && p1.rotationKnown;
+    // Turn mode: the last rotation increment is at least turnRateDeg a frame (a fast head
+    // turn; slow looking around stays far below), held for turnHoldFrames after (deceleration).
+    if (rot2 && rotationAngleDeg(frames_[static_cast<std::size_t>(f - 2)].T, p1.T) >= opt_.turnRateDeg) {
+      turnUntil_ = f + opt_.turnHoldFrames;
+    }
+    turning_ = f <= turnUntil_;
+    havePrediction_ = state_ == State::Tracking && f >= 2 && frames_[static_cast<std::size_t>(f - 2)].posed && p1.posed;
+    if (havePrediction_) {
       const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
       predicted_ = p1.T * (p2.T.inverse() * p1.T);
-      havePrediction_ = true;
+    } else if (rot2 && turning_) {
+      const Mat3<Scalar> R1 = p1.T.rotationMatrix(), R2 = frames_[static_cast<std::size_t>(f - 2)].T.rotationMatrix();
+      predicted_ = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), p1.T.translation());
     } else {
       predicted_ = p1.T;
     }
+    // Camera-1 → predicted-camera rotation for directions (the infinite homography K·Rpc·K⁻¹:
+    // exact for distant points, a few pixels off for near ones under the small head translation).
+    const Mat3<Scalar> Rpc = predicted_.rotationMatrix().transpose() * p1.T.rotationMatrix();
     from_.resize(tracks_.size());
     to_.resize(tracks_.size());
+    const SE3T Tcw = predicted_.inverse();
+    std::vector<char> guessed(tracks_.size(), 0);
     float sdx = 0, sdy = 0;
     int npred = 0;
-    std::vector<char> hasGuess(tracks_.size(), 0);
-    if (havePrediction_) {
-      const SE3T Tcw = predicted_.inverse();
-      for (std::size_t i = 0; i < tracks_.size(); ++i) {
-        const Track& t = tracks_[i];
-        if (t.point < 0) continue;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      const Track& t = tracks_[i];
+      from_[i] = t.uv;
+      to_[i] = t.uv;
+      if (turning_) {
+        const V2 x = normalised(t.uv);
+        const V3 d = Rpc * V3(x(0), x(1), Scalar(1));
+        const Vec2f h(float(cam_.fx * d(0) / d(2) + cam_.cx), float(cam_.fy * d(1) / d(2) + cam_.cy));
+        if (d(2) > Scalar(0) && std::isfinite(h(0)) && std::isfinite(h(1))) to_[i] = h;
+      }
+      if (t.point >= 0 && (havePrediction_ || (turning_ && state_ == State::Tracking))) {
+        // A mapped track: its point projected under the predicted pose.
         const V3 Xc = Tcw * points_[static_cast<std::size_t>(t.point)].X;
-        if (!(Xc(2) > Scalar(0))) continue;
-        const V2 q = cam_.project(Xc);
-        const Vec2f g(float(q(0)), float(q(1)));
-        if (!std::isfinite(g(0)) || !std::isfinite(g(1)) || !insideImage(g, -50.0f)) continue;
-        to_[i] = g;
-        hasGuess[i] = 1;
-        sdx += g(0) - t.uv(0), sdy += g(1) - t.uv(1);
-        ++npred;
+        if (Xc(2) > Scalar(0)) {
+          const V2 q = cam_.project(Xc);
+          const Vec2f g(float(q(0)), float(q(1)));
+          if (std::isfinite(g(0)) && std::isfinite(g(1)) && insideImage(g, -50.0f)) {
+            sdx += g(0) - to_[i](0), sdy += g(1) - to_[i](1);
+            ++npred;
+            to_[i] = g;
+            guessed[i] = 1;
+          }
+        }
       }
     }
-    const float mx = npred ? sdx / float(npred) : 0.0f, my = npred ? sdy / float(npred) : 0.0f;
-    for (std::size_t i = 0; i < tracks_.size(); ++i) {
-      from_[i] = tracks_[i].uv;
-      if (!hasGuess[i]) to_[i] = Vec2f(tracks_[i].uv(0) + mx, tracks_[i].uv(1) + my);
+    // Unmapped tracks: the mean shift of the mapped ones' guesses (in a turn: on top of the
+    // rotation guess, i.e. the mean translation-induced shift).
+    if (npred > 0) {
+      const float mx = sdx / float(npred), my = sdy / float(npred);
+      for (std::size_t i = 0; i < tracks_.size(); ++i) {
+        if (!guessed[i]) to_[i] = Vec2f(to_[i](0) + mx, to_[i](1) + my);
+      }
     }
     trackKlt(prevPyr_, curPyr_, from_, to_, ok_, opt_.klt);
     std::size_t w = 0;
@@ -417,11 +466,11 @@ class MonoSlam {
     replenish();
     refFrame_ = f;
     refMask_ = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
+    frames_[static_cast<std::size_t>(f)].mask = refMask_;
     for (Track& t : tracks_) {
       t.refUv = t.uv;
       t.fromRef = true;
     }
-    refTracks_ = static_cast<int>(tracks_.size());
   }
 
   void recordObservations(Frame& fr) {
@@ -476,54 +525,98 @@ class MonoSlam {
       fr.rotationKnown = false;
     }
     fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
-    // Correspondences with the reference frame.
-    std::vector<V2> x1, x2;
-    std::vector<int> idx;
+    // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
+    // tracks); in turn mode also any of the last initMaxGap frames (their tracks are in the
+    // per-frame observations, their rotations from the rays): the oldest of them sharing
+    // initMinTracks tracks. During a head turn the tracks live only a few frames, and a fixed
+    // reference would lose them all before the neck's translation gives parallax.
+    fr.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
+    const int window = f - opt_.initMaxGap;
+    if (window - 1 >= 0 && window - 1 != refFrame_) frames_[static_cast<std::size_t>(window - 1)].mask = CoarseMask();
+    const int oldest = std::max(segmentStart_, std::min(refFrame_, window));
+    int bestG = -1, refAlive = 0;
+    float bestFlow = -1;
+    std::vector<int> bestIdx, bestOther;
+    std::vector<int> idx, other;
     std::vector<float> flow;
-    const Mat3<Scalar> Rrc = frames_[static_cast<std::size_t>(refFrame_)].T.rotationMatrix().transpose() * fr.T.rotationMatrix();
-    for (std::size_t i = 0; i < tracks_.size(); ++i) {
-      if (!tracks_[i].fromRef) continue;
-      x1.push_back(normalised(tracks_[i].refUv));
-      x2.push_back(normalised(tracks_[i].uv));
-      idx.push_back(static_cast<int>(i));
+    for (int g = f - 1; g >= oldest; --g) {
+      const Frame& rf = frames_[static_cast<std::size_t>(g)];
+      if (g != refFrame_ && (!turning_ || g < window || !rf.rotationKnown)) continue;
+      // Common tracks: both observation lists are sorted by track id (ids only grow).
+      idx.clear(), other.clear(), flow.clear();
+      std::size_t a = 0;
+      for (std::size_t i = 0; i < tracks_.size(); ++i) {
+        while (a < rf.obsTrack.size() && rf.obsTrack[a] < tracks_[i].id) ++a;
+        if (a < rf.obsTrack.size() && rf.obsTrack[a] == tracks_[i].id) idx.push_back(static_cast<int>(i)), other.push_back(static_cast<int>(a));
+      }
+      if (g == refFrame_) refAlive = static_cast<int>(idx.size());
+      if (static_cast<int>(idx.size()) < opt_.initMinTracks) continue;
       // Rotation-compensated flow: where the reference ray lands under the rotation alone.
-      const V3 r = Rrc.transpose() * V3(x1.back()(0), x1.back()(1), Scalar(1));
-      if (r(2) > Scalar(0)) {
-        const float du = float(cam_.fx * (r(0) / r(2) - x2.back()(0)));
-        const float dv = float(cam_.fy * (r(1) / r(2) - x2.back()(1)));
+      const Mat3<Scalar> Rcr = fr.T.rotationMatrix().transpose() * rf.T.rotationMatrix();
+      for (std::size_t j = 0; j < idx.size(); ++j) {
+        const V2 x1 = normalised(rf.obsUv[static_cast<std::size_t>(other[j])]);
+        const V2 x2 = normalised(tracks_[static_cast<std::size_t>(idx[j])].uv);
+        const V3 r = Rcr * V3(x1(0), x1(1), Scalar(1));
+        if (!(r(2) > Scalar(0))) continue;
+        const float du = float(cam_.fx * (r(0) / r(2) - x2(0))), dv = float(cam_.fy * (r(1) / r(2) - x2(1)));
         flow.push_back(std::sqrt(du * du + dv * dv));
       }
-    }
-    const int alive = static_cast<int>(x1.size());
-    float medFlow = 0;
-    if (!flow.empty()) {
+      if (flow.size() < 8) continue;
       std::nth_element(flow.begin(), flow.begin() + static_cast<std::ptrdiff_t>(flow.size() / 2), flow.end());
-      medFlow = flow[flow.size() / 2];
+      // The oldest frame with enough common tracks: the longest baseline available.
+      bestFlow = flow[flow.size() / 2], bestG = g, bestIdx = idx, bestOther = other;
     }
-    if (alive >= opt_.initMinTracks && medFlow >= float(opt_.initMinFlowPx) && f - lastInitAttempt_ >= opt_.initEveryFrames) {
+    // Try when the rotation-compensated flow is large enough, or after a large rotation: the
+    // flow is compensated with the rays' rotation, which under a sideways head translation
+    // absorbs most of the parallax (the rotation–translation ambiguity); the two-view decides.
+    const Scalar turnedDeg = bestG >= 0 ? rotationAngleDeg(frames_[static_cast<std::size_t>(bestG)].T, fr.T) : Scalar(0);
+    const bool fastTurn = bestG >= 0 && turning_ && turnedDeg >= opt_.initMinRotationDeg;
+    const bool tryNow = bestG >= 0 && ((bestFlow >= float(opt_.initMinFlowPx) && f - lastInitAttempt_ >= opt_.initEveryFrames) ||
+                                       (fastTurn && f - lastInitAttempt_ >= 2));
+    if (tryNow) {
       lastInitAttempt_ = f;
+      const Frame& rf = frames_[static_cast<std::size_t>(bestG)];
+      std::vector<V2> x1, x2;
+      for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+        x1.push_back(normalised(rf.obsUv[static_cast<std::size_t>(bestOther[j])]));
+        x2.push_back(normalised(tracks_[static_cast<std::size_t>(bestIdx[j])].uv));
+      }
       TwoViewOptions<Scalar> tvo = opt_.twoView;
       tvo.seed = opt_.twoView.seed + static_cast<std::uint32_t>(f);
       const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo);
       if (opt_.log) {
-        opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(refFrame_) + ", " +
-                 std::to_string(alive) + " tracks, flow " + std::to_string(medFlow) + " px: status " +
+        opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(bestG) + ", " +
+                 std::to_string(x1.size()) + " tracks, flow " + std::to_string(bestFlow) + " px: status " +
                  std::to_string(int(tv.status)) + " model " + std::to_string(int(tv.model)) + " inliers " +
                  std::to_string(tv.numInliers) + " triangulated " + std::to_string(tv.numTriangulated) +
                  " parallax " + std::to_string(double(tv.medianParallaxDeg)));
       }
       if (tv.ok()) {
-        buildMap(f, tv, idx);
+        if (bestG != refFrame_ && refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
+        refFrame_ = bestG;
+        refMask_ = rf.mask;
+        for (Track& t : tracks_) t.fromRef = false;
+        for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+          Track& t = tracks_[static_cast<std::size_t>(bestIdx[j])];
+          t.refUv = rf.obsUv[static_cast<std::size_t>(bestOther[j])];
+          t.fromRef = true;
+        }
+        buildMap(f, tv, bestIdx);
+        for (int g = oldest; g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
         return;
       }
     }
-    // Too few reference tracks left: restart from this frame.
-    if (alive < std::max(opt_.initMinTracks, refTracks_ / 4)) {
+    // Too few reference tracks left: this frame becomes the reference (new corners first). In
+    // turn mode new corners also whenever the tracks thin out.
+    const int refTracks = static_cast<int>(frames_[static_cast<std::size_t>(refFrame_)].obsTrack.size());
+    if (refAlive < std::max(opt_.initMinTracks, refTracks / 4)) {
       if (opt_.log) {
-        opt_.log("frame " + std::to_string(f) + ": new initialisation reference (" + std::to_string(alive) +
-                 " tracks left, flow " + std::to_string(medFlow) + " px)");
+        opt_.log("frame " + std::to_string(f) + ": new initialisation reference (" + std::to_string(refAlive) + " tracks left)");
       }
+      if (refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
       setReference(f);
+    } else if (turning_ && static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10) {
+      replenish();
     }
   }
 
@@ -598,6 +691,12 @@ class MonoSlam {
   }
 
   // ---------------------------------------------------------------- tracking
+  /// Angle of the relative rotation between two poses (degrees): acos((tr(R_aᵀR_b) − 1)/2).
+  static Scalar rotationAngleDeg(const SE3T& a, const SE3T& b) {
+    const Scalar c = (Mat3<Scalar>(a.rotationMatrix().transpose() * b.rotationMatrix()).trace() - Scalar(1)) / Scalar(2);
+    return std::acos(std::max(Scalar(-1), std::min(Scalar(1), c))) * Scalar(180) / Constants<Scalar>::pi();
+  }
+
   int countMapped() const {
     int n = 0;
     for (const Track& t : tracks_) n += t.point >= 0 ? 1 : 0;
@@ -616,12 +715,26 @@ class MonoSlam {
       ti.push_back(static_cast<int>(i));
     }
     bool ok = false;
-    if (static_cast<int>(X.size()) >= opt_.minInliers) {
+    // Rotation-checked tracking: while a head turn sweeps the map out of view, fewer than
+    // minInliers map points may remain. A pose from as few as minTurnInliers is accepted when
+    // its rotation agrees with the one of all tracked rays (hundreds of tracks, mapped or not;
+    // near-exact for a rotation-dominant motion) and most of the points are inliers.
+    const int needed = std::min(opt_.minInliers, opt_.minTurnInliers);
+    Mat3<Scalar> dRays;
+    const bool haveRays = turning_ && static_cast<int>(X.size()) < 2 * opt_.minInliers && rayRotation(dRays);
+    if (static_cast<int>(X.size()) >= (haveRays ? needed : opt_.minInliers)) {
       PnPRansacOptions<Scalar> po = opt_.pnp;
       po.seed = opt_.pnp.seed + static_cast<std::uint32_t>(f);
-      po.minInliers = opt_.minInliers;
+      po.minInliers = haveRays ? needed : opt_.minInliers;
       const PnPRansacResult<Scalar> r = solvePnPRansac(X, uv, cam_, po);
-      if (r.ok()) {
+      bool accept = r.ok();
+      if (accept && r.numInliers < opt_.minInliers) {
+        const SE3T& prev = frames_[static_cast<std::size_t>(f - 1)].T;
+        const SE3T byRays(SO3<Scalar>::fromMatrix(Mat3<Scalar>(prev.rotationMatrix() * dRays)), prev.translation());
+        accept = rotationAngleDeg(byRays, r.T_w_c) < opt_.turnRotationAgreementDeg &&
+                 Scalar(r.numInliers) >= Scalar(0.8) * Scalar(X.size());
+      }
+      if (accept) {
         ok = true;
         fr.T = r.T_w_c;
         fr.inliers = r.numInliers;
@@ -646,8 +759,13 @@ class MonoSlam {
       // A keyframe when the map thins out (but not more often than keyframeMinInterval unless
       // tracking is about to fail) or after keyframeMaxInterval frames.
       const bool thin = mapped < opt_.keyframeMinInliers || Scalar(mapped) < opt_.keyframeInlierRatio * Scalar(lastKfInliers_);
+      // Rotation-aware (turn mode): a head turn sweeps the map out of view within a few frames,
+      // and new corners are only detected at keyframes, so a keyframe every
+      // keyframeMaxRotationDeg of rotation keeps the leading edge of the view seeded (its tracks
+      // are triangulated once the neck's translation gives them parallax).
+      const bool swept = turning_ && rotationAngleDeg(keyframes_.back().T, fr.T) > opt_.keyframeMaxRotationDeg;
       if (framesSinceKf_ >= opt_.keyframeMaxInterval || (thin && framesSinceKf_ >= opt_.keyframeMinInterval) ||
-          mapped < 2 * opt_.minInliers) {
+          mapped < 2 * opt_.minInliers || swept) {
         insertKeyframe(f);
       }
       return;
@@ -670,6 +788,7 @@ class MonoSlam {
       afterLoss_ = true;
       ++resets_;
       ++segment_;
+      segmentStart_ = f;
       // The tracks go on, under new ids: their old observations keep mapping to the old points.
       for (Track& t : tracks_) {
         t.point = -1;
@@ -696,7 +815,7 @@ class MonoSlam {
     const SE3T Tcw = fr.T.inverse();
     const Scalar cosMin = std::cos(opt_.minTriangulationDeg * Constants<Scalar>::pi() / Scalar(180));
     const Scalar maxErr2 = opt_.maxReprojPx * opt_.maxReprojPx;
-    int triCand = 0, triParallax = 0, triNew = 0;
+    int triCand = 0, triParallax = 0, triNew = 0, triBehind = 0, triReproj = 0;
     for (Track& t : tracks_) {
       const V2 u(Scalar(t.uv(0)), Scalar(t.uv(1)));
       if (t.point >= 0) {
@@ -723,10 +842,12 @@ class MonoSlam {
         const V3 Xc = keyframes_[static_cast<std::size_t>(o.kf)].T.inverse() * X;
         if (!(Xc(2) > Scalar(0))) {
           good = false;
+          ++triBehind;
           break;
         }
         if ((cam_.project(Xc) - o.uv).squaredNorm() > maxErr2) {
           good = false;
+          ++triReproj;
           break;
         }
       }
@@ -744,7 +865,8 @@ class MonoSlam {
       opt_.log("frame " + std::to_string(f) + ": keyframe " + std::to_string(k) + ", mapped tracks " +
                std::to_string(before) + " -> " + std::to_string(lastKfInliers_) + " after bundle adjustment; " +
                "triangulation: " + std::to_string(triCand) + " candidates, " + std::to_string(triParallax) +
-               " with parallax, " + std::to_string(triNew) + " new points");
+               " with parallax, " + std::to_string(triNew) + " new points (" + std::to_string(triBehind) +
+               " behind a camera, " + std::to_string(triReproj) + " off in a keyframe)");
     }
   }
 
@@ -999,14 +1121,16 @@ class MonoSlam {
   std::vector<Keyframe> keyframes_;
   std::vector<Frame> frames_;
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
-  int refFrame_ = 0, refTracks_ = 0, lastInitAttempt_ = -1000;
-  int segment_ = 0;
+  int refFrame_ = 0, lastInitAttempt_ = -1000;
+  int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
   int lost_ = 0, losses_ = 0, resets_ = 0;
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
   Scalar lastMedianDepth_ = Scalar(0);
   SE3T predicted_;
   bool havePrediction_ = false;
+  bool turning_ = false;
+  int turnUntil_ = -1;
   // Scratch.
   std::vector<Vec2f> from_, to_, prevUv_, existing_, fresh_;
   std::vector<char> ok_;
