@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/random_infiller.hpp"
 #include "hawor/motion/infiller_net.hpp"
 
 template class hawor::Linear<float>;
@@ -50,25 +51,9 @@ MatD randomMatrix(Eigen::Index rows, Eigen::Index cols, std::mt19937& rng, doubl
   return m;
 }
 
-// Every tensor of `c` with random values (float64), as the file format names them. Matrices
-// in ±1/√fan_in, LayerNorm gains 1 ± 0.25, offsets ±0.1.
-hawor::Npz randomWeightsNpz(const hawor::InfillerConfig& c, unsigned seed) {
-  std::mt19937 rng(seed);
-  hawor::Npz npz;
-  for (const auto& s : hawor::infillerTensorSpecs(c)) {
-    if (s.optional) continue;
-    size_t n = 1;
-    for (size_t d : s.shape) n *= d;
-    const bool norm = s.name.find("norm") != std::string::npos;
-    const bool gain = norm && s.name.size() > 6 && s.name.substr(s.name.size() - 6) == "weight";
-    const double fanIn = s.shape.size() == 2 ? double(s.shape[1]) : double(c.dModel);
-    const double bound = norm ? (gain ? 0.25 : 0.1) : 1 / std::sqrt(fanIn);
-    std::uniform_real_distribution<double> u(-bound, bound);
-    std::vector<double> v(n);
-    for (double& x : v) x = (gain ? 1.0 : 0.0) + u(rng);
-    npz.set(s.name, hawor::NpyArray::fromData(v.data(), s.shape));
-  }
-  return npz;
+// Every tensor of `c` with random values (tests/support/random_infiller.hpp).
+inline hawor::Npz randomWeightsNpz(const hawor::InfillerConfig& c, unsigned seed) {
+  return hawor_test::randomInfillerWeights(c, seed);
 }
 
 // Round trip through the archive bytes, as a file would be read.

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/random_infiller.hpp"
 #include "hawor/motion/infill_window.hpp"
 #include "hawor/motion/transformer_infill.hpp"
 
@@ -29,19 +30,7 @@ hawor::InfillerConfig config(const hawor::HandFeatureLayout& l, int window) {
 
 template <typename S>
 hawor::InfillerNet<S> randomNet(const hawor::InfillerConfig& c, unsigned seed) {
-  std::mt19937 rng(seed);
-  hawor::Npz npz;
-  for (const auto& s : hawor::infillerTensorSpecs(c)) {
-    if (s.optional) continue;
-    size_t n = 1;
-    for (size_t d : s.shape) n *= d;
-    const bool norm = s.name.find("norm") != std::string::npos;
-    std::uniform_real_distribution<double> u(-0.3, 0.3);
-    std::vector<double> v(n);
-    for (double& x : v) x = (norm && s.name.back() == 't' ? 1.0 : 0.0) + u(rng);  // "...weight"
-    npz.set(s.name, hawor::NpyArray::fromData(v.data(), s.shape));
-  }
-  return hawor::InfillerNet<S>(hawor::loadInfillerWeights<S>(npz, c));
+  return hawor::InfillerNet<S>(hawor::loadInfillerWeights<S>(hawor_test::randomInfillerWeights(c, seed), c));
 }
 
 // A smooth random world-space hand of T frames.
