@@ -90,7 +90,7 @@ export function probeVideo(video) {
 
 /** Frames from one ffmpeg process as RGB24, one preallocated buffer per frame (backpressure:
  *  the pipe is read only as fast as the pipeline consumes frames). */
-async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
+export async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
   const args = ['-v', 'error', '-nostdin', '-i', video, '-an', '-sn'];
   if (scaleTo) args.push('-vf', `scale=${scaleTo.width}:${scaleTo.height}:flags=area`);
   if (maxFrames) args.push('-frames:v', String(maxFrames));
@@ -127,7 +127,7 @@ async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
   if (code !== 0 && err.trim()) throw fail(`ffmpeg: ${err.trim().split('\n').pop()}`);
 }
 
-async function loadCore(path) {
+export async function loadCore(path) {
   if (!existsSync(path)) throw fail(`${path}: the WebAssembly core is missing (emcmake cmake -S . -B build/wasm && cmake --build build/wasm --target hawor_core), or give --core`);
   globalThis.require ??= createRequire(import.meta.url);
   globalThis.__dirname = dirname(resolve(path));
@@ -140,7 +140,7 @@ async function loadCore(path) {
   return create({ locateFile: (f) => join(dir, f), wasmBinary: readFileSync(wasm) });
 }
 
-function handModelFiles(o) {
+export function handModelFiles(o) {
   if (o.mano) {
     const pick = (side) => {
       for (const n of [`MANO_${side.toUpperCase()}.pkl`, `MANO_${side.toUpperCase()}.npz`, `mano_${side}.pkl`, `mano_${side}.npz`]) {

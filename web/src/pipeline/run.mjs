@@ -118,23 +118,27 @@ export function slamSize(width, height, maxSide = 640) {
 }
 
 /** Box-filtered grey (BT.601 luma) of an RGB(A) image at (dw, dh); each output pixel averages
- *  the source pixels whose centres fall in its footprint. out: optional Uint8Array(dw*dh). */
+ *  the source pixels whose centres fall in its footprint (one pass over the source, row sums
+ *  per output column). out: optional Uint8Array(dw*dh). */
 export function downscaleGrey(src, sw, sh, channels, dw, dh, out = new Uint8Array(dw * dh)) {
-  const x0 = new Int32Array(dw + 1);
-  for (let x = 0; x <= dw; ++x) x0[x] = Math.min(sw, Math.round((x * sw) / dw));
-  for (let y = 0; y < dh; ++y) {
-    const ya = Math.round((y * sh) / dh);
-    const yb = Math.max(ya + 1, Math.min(sh, Math.round(((y + 1) * sh) / dh)));
-    for (let x = 0; x < dw; ++x) {
-      const xa = x0[x];
-      const xb = Math.max(xa + 1, x0[x + 1]);
-      let acc = 0;
-      for (let yy = ya; yy < yb; ++yy) {
-        let p = (yy * sw + xa) * channels;
-        for (let xx = xa; xx < xb; ++xx, p += channels) acc += 299 * src[p] + 587 * src[p + 1] + 114 * src[p + 2];
-      }
-      out[y * dw + x] = Math.min(255, Math.round(acc / (1000 * (yb - ya) * (xb - xa))));
+  const ox = new Int32Array(sw);
+  const cw = new Int32Array(dw);
+  for (let x = 0; x < sw; ++x) { ox[x] = Math.min(dw - 1, Math.floor(((x + 0.5) * dw) / sw)); cw[ox[x]] += 1; }
+  const acc = new Float64Array(dw);
+  let y = 0;
+  for (let oy = 0; oy < dh; ++oy) {
+    acc.fill(0);
+    let rows = 0;
+    for (; y < sh && Math.min(dh - 1, Math.floor(((y + 0.5) * dh) / sh)) === oy; ++y, ++rows) {
+      let p = y * sw * channels;
+      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 0.299 * src[p] + 0.587 * src[p + 1] + 0.114 * src[p + 2];
     }
+    const o = oy * dw;
+    if (rows === 0) { // upscaling: repeat the previous row
+      if (oy > 0) out.copyWithin(o, o - dw, o);
+      continue;
+    }
+    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (rows * cw[x]))) : 0;
   }
   return out;
 }
@@ -397,11 +401,12 @@ export async function runPipeline(source, options, hooks = {}) {
       addTime('masks', now() - t1);
       // --- SLAM ---
       t1 = now();
-      downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
+      // at the frame's own size the core converts to grey itself
+      const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
       if (keptRgb) keptRgb.push(downscaleRgb(rgba, width, height, c, ss.width, ss.height));
       addTime('slamPrep', now() - t1);
       t1 = now();
-      info.slamStatus = slam.process(grey, mask);
+      info.slamStatus = slam.process(slamFrame, mask);
       addTime('slam', now() - t1);
       T += 1;
       info.ms = now() - tf;
