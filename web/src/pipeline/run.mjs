@@ -117,28 +117,29 @@ export function slamSize(width, height, maxSide = 640) {
   return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
 }
 
-/** Box-filtered grey (BT.601 luma) of an RGB(A) image at (dw, dh); each output pixel averages
+/** Box-filtered grey (BT.601 luma, integer weights) of an RGB(A) image at (dw, dh); each output pixel averages
  *  the source pixels whose centres fall in its footprint (one pass over the source, row sums
  *  per output column). out: optional Uint8Array(dw*dh). */
 export function downscaleGrey(src, sw, sh, channels, dw, dh, out = new Uint8Array(dw * dh)) {
   const ox = new Int32Array(sw);
   const cw = new Int32Array(dw);
   for (let x = 0; x < sw; ++x) { ox[x] = Math.min(dw - 1, Math.floor(((x + 0.5) * dw) / sw)); cw[ox[x]] += 1; }
-  const acc = new Float64Array(dw);
+  // integer luma weights (BT.601 x 256): 77 R + 150 G + 29 B
+  const acc = new Int32Array(dw);
   let y = 0;
   for (let oy = 0; oy < dh; ++oy) {
     acc.fill(0);
     let rows = 0;
     for (; y < sh && Math.min(dh - 1, Math.floor(((y + 0.5) * dh) / sh)) === oy; ++y, ++rows) {
       let p = y * sw * channels;
-      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 0.299 * src[p] + 0.587 * src[p + 1] + 0.114 * src[p + 2];
+      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 77 * src[p] + 150 * src[p + 1] + 29 * src[p + 2];
     }
     const o = oy * dw;
     if (rows === 0) { // upscaling: repeat the previous row
       if (oy > 0) out.copyWithin(o, o - dw, o);
       continue;
     }
-    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (rows * cw[x]))) : 0;
+    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (256 * rows * cw[x]))) : 0;
   }
   return out;
 }
