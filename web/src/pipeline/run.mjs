@@ -33,7 +33,9 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
-//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2) }
+//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2),
+//           detectGap? (2)               while one hand is tracked, the palm detector looks for
+//                                        the other only every detectGap+1 frames }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
@@ -193,19 +195,26 @@ function pRight(h) {
 }
 
 /**
- * Left/right slots for this frame's detections (at most one per side): the assignment that
- * maximises the handedness evidence plus continuity with the previous frame's wrists (a hand
- * within `reach` px of last frame's wrist on a side is most likely that side's hand).
+ * Left/right slots for this frame's detections (at most one per side): the assignment of least
+ * cost, where a detection's cost on a side is
+ *   -log P(side) from the landmark network's handedness, clamped to [0.05, 0.95] (one frame's
+ *     label, which flips now and then with full confidence, can be outvoted), minus
+ *   CONTINUITY * (1 - d / reach) when it lies within `reach` px of that side's wrist in the
+ *     previous frame (tracks keep their side),
+ * plus, for two hands, CROSSED when the left slot's wrist lies right of the right slot's (hands
+ * rarely cross in an egocentric view).
  * prev: { left: [x, y] | null, right: [x, y] | null }; reach: pixels.
  */
 export function assignSides(dets, prev, reach) {
+  const CONTINUITY = 3.5;
+  const CROSSED = 2;
   const cost = (d, side) => {
-    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 1e-3), 1 - 1e-3);
+    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 0.05), 0.95);
     let c = -Math.log(p);
     const w = prev[side];
     if (w) {
       const dist = Math.hypot(d.landmarks[0] - w[0], d.landmarks[1] - w[1]);
-      c += dist < reach ? -1.5 * (1 - dist / reach) : 0;
+      if (dist < reach) c -= CONTINUITY * (1 - dist / reach);
     }
     return c;
   };
@@ -214,10 +223,11 @@ export function assignSides(dets, prev, reach) {
     const d = dets[0];
     return cost(d, 'left') < cost(d, 'right') ? { left: d, right: null } : { left: null, right: d };
   }
-  // best two (the tracker returns at most maxHands)
+  // the best two (the tracker returns at most maxHands)
   const [a, b] = dets;
-  const ab = cost(a, 'left') + cost(b, 'right');
-  const ba = cost(b, 'left') + cost(a, 'right');
+  const crossed = (l, r) => (l.landmarks[0] > r.landmarks[0] ? CROSSED : 0);
+  const ab = cost(a, 'left') + cost(b, 'right') + crossed(a, b);
+  const ba = cost(b, 'left') + cost(a, 'right') + crossed(b, a);
   return ab <= ba ? { left: a, right: b } : { left: b, right: a };
 }
 
@@ -316,13 +326,14 @@ export async function runPipeline(source, options, hooks = {}) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
       const m = options.models ?? {};
+      const detectGap = options.detectGap ?? 2;
       if (m.palmSession && m.landmarkSession) {
-        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2 });
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2 });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap });
       }
     }
     if (options.depthModel) {
