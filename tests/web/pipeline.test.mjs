@@ -295,6 +295,19 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
       assert.ok(es.perHand[s].metrics.pa_mpjpe < 6, `simulated ${s} PA-MPJPE ${es.perHand[s].metrics.pa_mpjpe}`);
       assert.ok(es.perHand[s].metrics.wa_mpjpe < 80, `simulated ${s} WA-MPJPE ${es.perHand[s].metrics.wa_mpjpe}`);
     }
+    // ... and with a metric-depth source (the rendered depth, biased and noisy) on the keyframes:
+    // it runs on every keyframe; where it gives the scale (this short clip has few keyframes and
+    // few points in AdaSM's depth window, so it may not), that scale matches the truth
+    const { noisyTrueDepth } = await import('../../examples/bench_pipeline.mjs');
+    const withDepth = await runPipeline({ width: info.width, height: info.height, fps: 30, frameCount: 60,
+      frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, { decode: 0 }) },
+    { core, focalPx: seq.fx, handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)) },
+      observations: simulatedObservations(gt, seq, 60, 2, 5, 7), depthModel: noisyTrueDepth(seq, 11) });
+    const ed = evaluate(core, withDepth, gt, seq, gtCam);
+    assert.ok(withDepth.timings.depth > 0 && withDepth.scale.keyframes === withDepth.slam.numKeyframes, JSON.stringify(withDepth.scale));
+    if (['depth', 'fused'].includes(withDepth.scale.method)) {
+      assert.ok(Math.abs(1 / ed.simScale - 1) < 0.1, `scale off by ${1 / ed.simScale} (${JSON.stringify(withDepth.scale)})`);
+    }
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }

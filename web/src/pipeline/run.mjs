@@ -22,8 +22,12 @@
 //                                        default: DEFAULT_DIAGONAL_FOV_DEG on the diagonal
 //           modelKind: 'lite' | 'full'   recorded in the result (the caller picks the bytes)
 //           depthModel?: { bytes, config }   a metric-depth ONNX + its JSON config (the slot of
-//                                        web/src/depth_model.mjs), run on the SLAM keyframes
-//           threads?                     recorded (the caller sets ort.env.wasm.numThreads)
+//                                        web/src/depth_model.mjs), run on the SLAM keyframes,
+//                        | { predict: async (frameIndex, rgb, width, height) => Float32Array }
+//                                        any other source of metric depth (metres, NaN unknown)
+//                                        at the SLAM resolution (benchmarks: ground truth)
+//           threads?                     onnxruntime's threads (ort.env.wasm.numThreads, set here
+//                                        if given; only effective before its first session)
 //           slamMaxSide? (640)           the SLAM and hand masks run on frames downscaled to
 //                                        this long side (intrinsics scaled alike)
 //           maxPixels? (MAX_PIXELS)      larger frames are refused with a clear error (the
@@ -322,6 +326,9 @@ export async function runPipeline(source, options, hooks = {}) {
     owned.push(fitters.left, fitters.right);
     const P = { left: 3 * (models.left.numJoints() - 1), right: 3 * (models.right.numJoints() - 1) };
     const B = { left: models.left.numBetas(), right: models.right.numBetas() };
+    if (options.threads && options.ort && options.ort.env && options.ort.env.wasm && !options.models?.palmSession) {
+      options.ort.env.wasm.numThreads = options.threads; // effective before onnxruntime's first session only
+    }
     if (!options.observations) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
@@ -336,7 +343,10 @@ export async function runPipeline(source, options, hooks = {}) {
         tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap });
       }
     }
-    if (options.depthModel) {
+    if (options.depthModel && typeof options.depthModel.predict === 'function') {
+      const custom = options.depthModel;
+      depthModel = { predict: (rgb, w, h, c, frame) => custom.predict(frame, rgb, w, h) };
+    } else if (options.depthModel) {
       if (!options.ort) throw new Error('runPipeline: a depth model needs options.ort');
       depthModel = await DepthModel.create(options.ort, options.depthModel.bytes, options.depthModel.config);
     }
@@ -346,7 +356,8 @@ export async function runPipeline(source, options, hooks = {}) {
     owned.push(slam);
     const grey = new Uint8Array(ss.width * ss.height);
     const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
-    const keptRgb = depthModel ? [] : null;
+    const keptRgb = depthModel ? [] : null; // frames (and hand masks) for the depth of the keyframes
+    const keptMasks = depthModel ? [] : null;
     const prevWrist = { left: null, right: null };
     const reach = 0.15 * Math.hypot(width, height);
     let T = 0;
@@ -410,12 +421,13 @@ export async function runPipeline(source, options, hooks = {}) {
       // --- masks at the SLAM resolution ---
       t1 = now();
       const mask = maskHands.length ? core.renderHandMasks(ss.width, ss.height, Ks, maskHands, dilate) : null;
+      if (keptMasks) keptMasks.push(mask);
       addTime('masks', now() - t1);
       // --- SLAM ---
       t1 = now();
       // at the frame's own size the core converts to grey itself
       const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
-      if (keptRgb) keptRgb.push(downscaleRgb(rgba, width, height, c, ss.width, ss.height));
+      if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : downscaleRgb(rgba, width, height, c, ss.width, ss.height));
       addTime('slamPrep', now() - t1);
       t1 = now();
       info.slamStatus = slam.process(slamFrame, mask);
@@ -472,10 +484,14 @@ export async function runPipeline(source, options, hooks = {}) {
       depthMaps = [];
       for (let k = 0; k < frames.length; ++k) {
         checkAbort(signal);
-        depthMaps.push(await depthModel.predict(keptRgb[frames[k]], ss.width, ss.height, 3));
+        const map = await depthModel.predict(keptRgb[frames[k]], ss.width, ss.height, 3, frames[k]);
+        if (!(map instanceof Float32Array) || map.length !== ss.width * ss.height) {
+          throw new Error(`depth of keyframe ${frames[k]}: expected a Float32Array of ${ss.width}x${ss.height}`);
+        }
+        depthMaps.push(map);
         if (onProgress) onProgress({ stage: 'depth', done: k + 1, total: frames.length });
       }
-      keptRgb.length = 0;
+      keptRgb.length = 0; // the masks are still needed by the scale
       addTime('depth', now() - t1);
     }
 
@@ -493,7 +509,7 @@ export async function runPipeline(source, options, hooks = {}) {
     let scale = { scale: NaN, method: 'none', confidence: 0 };
     if (traj.initialised && (wristTracks.length || depthMaps)) {
       try {
-        const masksKf = depthMaps ? null : undefined;
+        const masksKf = depthMaps ? Array.from(traj.keyframeDepths.frames, (f) => keptMasks[f] ?? null) : undefined;
         scale = core.metricScale({
           rotations: traj.rotations, translations: traj.translations, fps,
           ...(depthMaps ? { keyframeDepths: traj.keyframeDepths, depthMaps, depthWidth: ss.width, depthHeight: ss.height, masks: masksKf } : {}),
