@@ -203,6 +203,9 @@ export async function main(argv) {
   const palm = join(o.models, `palm_detection_${o.model}.onnx`);
   const lm = join(o.models, `hand_landmark_${o.model}.onnx`);
   for (const f of [palm, lm]) if (!existsSync(f)) throw fail(`${f}: missing (scripts/install.sh converts the models)`);
+  const depthConfig = o.depthModel ? o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json') : null;
+  if (o.depthModel && !existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
+  if (o.depthModel && !existsSync(depthConfig)) throw fail(`${depthConfig}: the depth model's config is missing (give --depth-config)`);
   const info = probeVideo(o.video);
   let { width, height } = info;
   let scaleTo = null;
@@ -215,12 +218,7 @@ export async function main(argv) {
   const hm = handModelFiles(o);
   const handModels = { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right };
   let depthModel;
-  if (o.depthModel) {
-    const cfg = o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json');
-    if (!existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
-    if (!existsSync(cfg)) throw fail(`${cfg}: the depth model's config is missing (give --depth-config)`);
-    depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(cfg, 'utf8') };
-  }
+  if (o.depthModel) depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(depthConfig, 'utf8') };
   const tLoad = performance.now();
   const core = await loadCore(o.core ?? process.env.HAWOR_CORE ?? join(repo, 'build', 'wasm', 'wasm', 'hawor_core.mjs'));
   const ort = await import('onnxruntime-web');

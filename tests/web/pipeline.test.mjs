@@ -216,6 +216,8 @@ test('pipeline CLI: usage errors exit 2; not a video, no video stream exit 1; 1 
     assert.equal(r.status, 2); assert.match(r.stderr, /--model must be lite or full/);
     r = runCli(['run', join(dir, 'none.mp4'), '--out', dir]);
     assert.equal(r.status, 1); assert.match(r.stderr, /none\.mp4: no such file/);
+    r = runCli(['run', cli, '--out', dir, '--depth-model', join(dir, 'none.onnx')]);
+    assert.equal(r.status, 1); assert.match(r.stderr, /none\.onnx: no such file/);
     writeFileSync(join(dir, 'text.mp4'), 'not a video\n');
     r = runCli(['run', join(dir, 'text.mp4'), '--out', join(dir, 'o1')]);
     assert.equal(r.status, 1); assert.match(r.stderr, /not a readable video/);
@@ -253,7 +255,12 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
   try {
     const seq = makeSequence(haworBin, 'table_work', 3, 60, '640x480', join(dir, 'seq'));
     const out = join(dir, 'out');
-    const r = runCli(['run', join(seq.dir, 'video.mp4'), '--out', out, '--focal', String(seq.fx), '--threads', '1']);
+    // the depth slot end to end with a tiny test network (its depth is meaningless: only the
+    // plumbing is checked, ONNX -> keyframe depth maps -> scale)
+    const { buildAffineDepthModel, affineDepthConfig } = await import('../../web/tools/make_test_depth_model.mjs');
+    writeFileSync(join(dir, 'affine.onnx'), buildAffineDepthModel({ width: 64, height: 48 }));
+    writeFileSync(join(dir, 'affine.json'), JSON.stringify(affineDepthConfig({ width: 64, height: 48 })));
+    const r = runCli(['run', join(seq.dir, 'video.mp4'), '--out', out, '--focal', String(seq.fx), '--threads', '1', '--depth-model', join(dir, 'affine.onnx')]);
     assert.equal(r.status, 0, r.stderr);
     const core = await loadCore();
     const result = JSON.parse(readFileSync(join(out, 'result.json'), 'utf8'));
@@ -275,6 +282,7 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
       assert.ok(h.metrics.wa_mpjpe < 80, `${s} WA-MPJPE ${h.metrics.wa_mpjpe} mm`);
     }
     assert.ok(result.slam.initialised, 'the SLAM initialised');
+    assert.ok(result.timings.depth > 0 && result.scale.keyframes === result.slam.numKeyframes, JSON.stringify(result.scale));
     assert.ok(ev.ate < 0.1 * path * 1000, `ATE ${ev.ate} mm on a ${path} m path (${msg})`);
     // world.npz keys (read by the core's npz reader)
     const w = core.readNpz(new Uint8Array(readFileSync(join(out, 'world.npz'))), 'world.npz');

@@ -37,7 +37,7 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
-//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2),
+//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
 //           detectGap? (2)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
@@ -301,7 +301,7 @@ export async function runPipeline(source, options, hooks = {}) {
   const sy = ss.height / height;
   // The SLAM image's pixel (u', v') covers source pixels u = (u' + 0.5) / s - 0.5.
   const Ks = [intr.fx * sx, intr.fy * sy, (intr.cx + 0.5) * sx - 0.5, (intr.cy + 0.5) * sy - 0.5];
-  const dilate = options.maskDilatePx ?? 2;
+  const dilate = options.maskDilatePx ?? 2; // pixels at the SLAM resolution (see README: 8 px was no better)
   const infillMethod = options.infill ?? 'spline';
 
   const owned = []; // embind objects to delete
