@@ -40,6 +40,24 @@ async function loadCore() {
   return corePromise;
 }
 
+test('pipeline: run.mjs and exports.mjs import nothing node-only (they run in a Web Worker)', () => {
+  const seen = new Set();
+  const visit = (file) => {
+    if (seen.has(file)) return;
+    seen.add(file);
+    const src = readFileSync(file, 'utf8');
+    for (const m of src.matchAll(/^\s*(?:import|export)\s[^'"]*?from\s+['"]([^'"]+)['"]/gm)) {
+      const spec = m[1];
+      assert.ok(spec.startsWith('./') || spec.startsWith('../'), `${file} imports '${spec}' (only relative imports run in a worker without a bundler)`);
+      visit(join(file, '..', spec));
+    }
+    assert.doesNotMatch(src, /\b(require\(|process\.|import\(['"]node:)/, `${file} uses node-only APIs`);
+  };
+  visit(join(root, 'web/src/pipeline/run.mjs'));
+  visit(join(root, 'web/src/pipeline/exports.mjs'));
+  assert.ok(seen.size >= 6, [...seen].join(', '));
+});
+
 // --- pure helpers ----------------------------------------------------------------------------------
 
 test('pipeline: intrinsics from a focal or a diagonal field of view', () => {
