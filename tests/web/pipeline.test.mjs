@@ -301,6 +301,8 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
     }
     assert.ok(result.slam.initialised, 'the SLAM initialised');
     assert.ok(result.timings.depth > 0 && result.scale.keyframes === result.slam.numKeyframes, JSON.stringify(result.scale));
+    // the SLAM's map points (world, metres): finite, (N, 3)
+    assert.ok(result.points.length % 3 === 0 && result.points.length > 30 && result.points.every((v) => v !== null && Number.isFinite(v)), `${result.points.length / 3} points`);
     assert.ok(ev.ate < 0.1 * path * 1000, `ATE ${ev.ate} mm on a ${path} m path (${msg})`);
     // world.npz keys (read by the core's npz reader)
     const w = core.readNpz(new Uint8Array(readFileSync(join(out, 'world.npz'))), 'world.npz');

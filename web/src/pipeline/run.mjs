@@ -55,7 +55,7 @@
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
-//   points: (N*3) world points in metres (the SLAM keyframes' depths back-projected), may be empty,
+//   points: (N*3) the SLAM's final map points, world frame, metres; may be empty,
 //   scale: { scale, method: 'depth'|'hands'|'fused'|'none', confidence, ... (metricScale's fields) },
 //   hands: { left: Hand, right: Hand },  Hand = {
 //     valid (T: observed and fitted), infilled (T: filled by the infiller), present (any frame),
@@ -540,10 +540,11 @@ export async function runPipeline(source, options, hooks = {}) {
       quaternions.set(matToQuat(traj.rotations, 9 * t), 4 * t);
       timestamps[t] = t / fps;
     }
-    // SLAM points: keyframe depths back-projected into the world
+    // SLAM points: the final map (cores before it was exported: the keyframe depths
+    // back-projected into the world, one point per keyframe observation)
     const kd = traj.keyframeDepths;
-    const points = new Float64Array(3 * kd.depth.length);
-    for (let q = 0; q < kd.depth.length; ++q) {
+    const points = traj.points ? traj.points.map((v) => s * v) : new Float64Array(3 * kd.depth.length);
+    for (let q = 0; !traj.points && q < kd.depth.length; ++q) {
       const f = kd.frames[kd.kf[q]];
       const z = kd.depth[q];
       const xc = ((kd.uv[2 * q] - Ks[2]) / Ks[0]) * z;
