@@ -67,8 +67,10 @@
 //     jointsCam (T*21*3)                the fitted keypoints in the camera frame (NaN elsewhere)
 //     keypoints2d (T*21*2)              the detected image keypoints (NaN where not detected)
 //     reprojRmsPx (T), handPoseCols P, betaCols B, model: kind },
-//   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles),
-//   timings: { stage: total ms }, warnings: [strings], noHands: bool }
+//   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles; the vertices
+//          of frame t: core.HandModel(bytes).forward({rot, handPose, betas, trans} of frame t)),
+//   timings: { stage: total ms, load: model loading }, warnings: [strings], noHands: bool,
+//   stats: { palmRuns, landmarkRuns } (the tracker's; {} with observations) }
 //
 // Stages (timings keys): perception (networks + crops), fit (hand fit per hand), masks (hand
 // silhouettes at the SLAM resolution), slamPrep (downscale + grey), slam (tracking + mapping),
