@@ -3,6 +3,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
-cmake -S . -B build/native -DCMAKE_BUILD_TYPE=Release >/dev/null
+source scripts/native_compiler.sh
+env $(native_compiler_env) cmake -S . -B build/native -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build/native --target hawor_cli -j"$(nproc)" >/dev/null
 build/native/examples/hawor demo --out hawor-demo
