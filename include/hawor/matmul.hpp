@@ -582,10 +582,12 @@ void matmulAmxKernel(const float* A, Eigen::Index lda, Eigen::Index n, const Amx
 
 /// C(n×m) = A(n×k)·B (+ bias, m values, when not null) with AMX tiles: the bf16x3 split
 /// (`split`, ~fp32 accuracy) or plain bf16. A and C row-major with leading dimensions lda, ldc;
-/// `scratch` holds amxScratchSize(n, k) floats. Only where amxAvailable() (else it faults).
+/// `scratch` holds amxScratchSize(n, k) floats. Throws hawor::Error where !amxAvailable() (a
+/// tile instruction would fault there).
 inline void matmulAmx(const float* A, Eigen::Index lda, Eigen::Index n, const AmxPanels& B,
                       float* C, Eigen::Index ldc, const float* bias, float* scratch,
                       bool split = true) {
+  if (!amxAvailable()) throw Error("matmulAmx: AMX tiles are not available here");
   detail::Bf16* apack = reinterpret_cast<detail::Bf16*>(scratch);
   if (split) {
     detail::matmulAmxKernel<true>(A, lda, n, B, C, ldc, bias, apack);

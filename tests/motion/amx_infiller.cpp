@@ -54,6 +54,15 @@ TEST_CASE("backend resolution: AMX for float only, where it runs", "[motion][mat
   CHECK(hawor::resolveMatmulBackend<float>(MatmulBackend::Auto) == amx);
   CHECK(hawor::resolveMatmulBackend<float>(MatmulBackend::Amx) == amx);
   CHECK(std::string(hawor::matmulBackendName(MatmulBackend::AmxBf16)) == "AmxBf16");
+#if defined(HAWOR_HAS_AMX)
+  if (!hawor::amxAvailable()) {  // e.g. HAWOR_AMX=0: the kernel refuses instead of faulting
+    hawor::AmxPanels P;
+    const float a[2] = {1, 2}, b[2] = {3, 4};
+    float c[1] = {0}, scratch[2048];
+    P.pack(b, 1, 1, 2, 1);
+    CHECK_THROWS_AS(hawor::matmulAmx(a, 2, 1, P, c, 1, nullptr, scratch), hawor::Error);
+  }
+#endif
 }
 
 TEST_CASE("bf16 rounding and the hi/lo split", "[motion][matmul][amx]") {
