@@ -2,15 +2,20 @@
 // one 120-frame, two-hand window at the official sizes, float and double, on 1 and 2 threads
 // (hawor::ThreadPool: the window's frames split between the threads) in the same run.
 //
-//   bench_infiller [--repeats N] [--weights W.npz] [--all-backends] [--threads 1,2]
+//   bench_infiller [--repeats N] [--weights W.npz] [--all-backends] [--backends LIST]
+//                  [--threads 1,2]
 //
 // Without --weights the network has random weights (the speed does not depend on them). The
-// default matrix-product backend is Eigen natively and the packed SIMD kernel in WebAssembly;
-// --all-backends times the other one too (Eigen in WebAssembly takes seconds per window).
-// Prints the median wall and CPU time (all threads) per window over N timed runs (after two
-// warm-up runs), the arithmetic rate per wall second, and (natively, glibc) the heap allocations
-// per forward pass. Where the build has no threads (WebAssembly without -pthread) a pool of any
-// size runs on one thread, and the line says so.
+// default matrix-product backend is the network's own (Auto: AMX tiles with the bf16x3 split for
+// float where the build and CPU have AMX, else Eigen natively and the packed SIMD kernel in
+// WebAssembly); --all-backends times every backend that runs here (Eigen, Packed, Amx, AmxBf16;
+// Eigen in WebAssembly takes seconds per window); --backends eigen,packed,amx,amx-bf16 picks.
+// The AMX backends are float only (double lines are Eigen/Packed). Prints the median, 95th
+// percentile and minimum wall time and the median CPU time (all threads) per window over N timed
+// runs (after two warm-up runs), the arithmetic rate per median wall second, the largest
+// |y − y_ref| against one double-precision Eigen forward on the same input (float lines), and
+// (natively, glibc) the heap allocations per forward pass. Where the build has no threads
+// (WebAssembly without -pthread) a pool of any size runs on one thread, and the line says so.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -102,21 +107,27 @@ hawor::Npz randomWeights(const hawor::InfillerConfig& c) {
   return npz;
 }
 
-const char* backendName(hawor::MatmulBackend b) {
-  return b == hawor::MatmulBackend::Eigen ? "Eigen" : "Packed";
+// The benchmark's window: random features, a 30-frame and a 12-frame gap.
+template <typename Scalar>
+hawor::RowMatrixX<Scalar> benchInput(const hawor::InfillerConfig& c, hawor::ValidMask& valid) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1, 1);
+  hawor::RowMatrixX<Scalar> x(c.window, c.features);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x.data()[i] = Scalar(u(rng));
+  valid.assign(static_cast<size_t>(c.window), 1);
+  for (int t = 30; t < 60; ++t) valid[static_cast<size_t>(t)] = 0;  // a 30-frame gap
+  for (int t = 100; t < 112; ++t) valid[static_cast<size_t>(t)] = 0;
+  return x;
 }
 
 template <typename Scalar>
-void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats, int threads) {
+void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats, int threads,
+           const hawor::RowMatrixX<double>& reference) {
   const hawor::InfillerConfig c;
   const hawor::InfillerNet<Scalar> net(hawor::loadInfillerWeights<Scalar>(npz, c), backend);
-  std::mt19937 rng(2);
-  std::uniform_real_distribution<double> u(-1, 1);
-  hawor::RowMatrixX<Scalar> x(c.window, c.features), y;
-  for (Eigen::Index i = 0; i < x.size(); ++i) x.data()[i] = Scalar(u(rng));
-  hawor::ValidMask valid(static_cast<size_t>(c.window), 1);
-  for (int t = 30; t < 60; ++t) valid[static_cast<size_t>(t)] = 0;  // a 30-frame gap
-  for (int t = 100; t < 112; ++t) valid[static_cast<size_t>(t)] = 0;
+  hawor::ValidMask valid;
+  const hawor::RowMatrixX<Scalar> x = benchInput<Scalar>(c, valid);
+  hawor::RowMatrixX<Scalar> y;
   hawor::ThreadPool pool(threads);
   hawor::InfillerWorkspace<Scalar> ws(c, pool.size());
   net.forward(x, valid, y, ws, &pool);  // warm-up: sizes y, pages in the weights, tiers up wasm
@@ -139,12 +150,16 @@ void bench(const hawor::Npz& npz, hawor::MatmulBackend backend, int repeats, int
   std::sort(wall.begin(), wall.end());
   std::sort(cpu.begin(), cpu.end());
   const double medWall = wall[wall.size() / 2], medCpu = cpu[cpu.size() / 2];
+  const double p95 = wall[std::min(wall.size() - 1, (wall.size() * 95 + 99) / 100 - 1)];
+  const double diff = (y.template cast<double>() - reference).cwiseAbs().maxCoeff();
   std::printf(
-      "infiller forward, %d frames x %d features: %-6s %-6s %d thread%s%s median %8.1f ms (cpu "
-      "%8.1f, min %8.1f)  %5.1f GFLOP/s  allocations/forward %s%s\n",
-      c.window, c.features, sizeof(Scalar) == 4 ? "float" : "double", backendName(backend),
-      pool.size(), pool.size() == 1 ? " " : "s", pool.size() < threads ? " (no threads here)" : "",
-      medWall, medCpu, wall.front(), forwardFlops(c, c.window) / medWall * 1e-6,
+      "infiller forward, %d frames x %d features: %-6s %-7s %d thread%s%s median %7.1f ms (p95 "
+      "%7.1f, min %7.1f, cpu %7.1f)  %5.1f GFLOP/s  max|y-y_double| %.2g  allocations/forward "
+      "%s%s\n",
+      c.window, c.features, sizeof(Scalar) == 4 ? "float" : "double",
+      hawor::matmulBackendName(net.backend()), pool.size(), pool.size() == 1 ? " " : "s",
+      pool.size() < threads ? " (no threads here)" : "", medWall, p95, wall.front(), medCpu,
+      forwardFlops(c, c.window) / medWall * 1e-6, diff,
 #ifdef HAWOR_BENCH_COUNTS_MALLOC
       std::to_string(allocations).substr(0, 4).c_str(),
 #else
@@ -165,6 +180,7 @@ int main(int argc, char** argv) {
 #endif
     std::string weights;
     bool all = false;
+    std::vector<hawor::MatmulBackend> chosen;
     std::vector<int> threadCounts{1, 2};
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -174,6 +190,23 @@ int main(int argc, char** argv) {
         weights = argv[++i];
       } else if (a == "--all-backends") {
         all = true;
+      } else if (a == "--backends" && i + 1 < argc) {
+        const std::string list = std::string(argv[++i]) + ",";
+        for (size_t p = 0, q; (q = list.find(',', p)) != std::string::npos; p = q + 1) {
+          const std::string name = list.substr(p, q - p);
+          if (name == "eigen") {
+            chosen.push_back(hawor::MatmulBackend::Eigen);
+          } else if (name == "packed") {
+            chosen.push_back(hawor::MatmulBackend::Packed);
+          } else if (name == "amx") {
+            chosen.push_back(hawor::MatmulBackend::Amx);
+          } else if (name == "amx-bf16") {
+            chosen.push_back(hawor::MatmulBackend::AmxBf16);
+          } else if (!name.empty()) {
+            std::fprintf(stderr, "bench_infiller: unknown backend %s\n", name.c_str());
+            return 2;
+          }
+        }
       } else if (a == "--threads" && i + 1 < argc) {
         threadCounts.clear();
         for (const char* p = argv[++i]; *p;) {
@@ -189,7 +222,7 @@ int main(int argc, char** argv) {
       } else {
         std::fprintf(stderr,
                      "usage: bench_infiller [--repeats N] [--weights W.npz] [--all-backends] "
-                     "[--threads 1,2]\n");
+                     "[--backends eigen,packed,amx,amx-bf16] [--threads 1,2]\n");
         return 2;
       }
     }
@@ -197,14 +230,38 @@ int main(int argc, char** argv) {
     std::printf("infiller network: %.2f GFLOP per %d-frame window\n",
                 forwardFlops(c, c.window) * 1e-9, c.window);
     const hawor::Npz npz = weights.empty() ? randomWeights(c) : hawor::Npz::read(weights);
-    std::vector<hawor::MatmulBackend> backends{hawor::defaultMatmulBackend()};
+    std::vector<hawor::MatmulBackend> backends = chosen;
     if (all) {
-      backends.push_back(backends[0] == hawor::MatmulBackend::Eigen ? hawor::MatmulBackend::Packed
-                                                                    : hawor::MatmulBackend::Eigen);
+      backends = {hawor::defaultMatmulBackend(),
+                  hawor::defaultMatmulBackend() == hawor::MatmulBackend::Eigen
+                      ? hawor::MatmulBackend::Packed
+                      : hawor::MatmulBackend::Eigen,
+                  hawor::MatmulBackend::Amx, hawor::MatmulBackend::AmxBf16};
+    } else if (backends.empty()) {
+      backends = {hawor::MatmulBackend::Auto};
+    }
+    std::printf("AMX (bf16 tiles): %s\n",
+                hawor::amxAvailable() ? "available"
+#if defined(HAWOR_HAS_AMX)
+                                      : "compiled in, not available on this CPU / kernel"
+#else
+                                      : "not compiled in (no -mamx-tile -mamx-bf16)"
+#endif
+    );
+    // The reference output: one double-precision Eigen forward on the benchmark's input.
+    hawor::RowMatrixX<double> reference;
+    {
+      const hawor::InfillerNet<double> ref(hawor::loadInfillerWeights<double>(npz, c),
+                                           hawor::MatmulBackend::Eigen);
+      hawor::ValidMask valid;
+      reference = ref.forward(benchInput<double>(c, valid), valid);
     }
     for (auto b : backends) {
-      for (int t : threadCounts) bench<float>(npz, b, repeats, t);
-      for (int t : threadCounts) bench<double>(npz, b, repeats, t);
+      const bool amx = b == hawor::MatmulBackend::Amx || b == hawor::MatmulBackend::AmxBf16;
+      if (amx && hawor::resolveMatmulBackend<float>(b) != b) continue;  // not here
+      for (int t : threadCounts) bench<float>(npz, b, repeats, t, reference);
+      if (amx) continue;  // float only
+      for (int t : threadCounts) bench<double>(npz, b, repeats, t, reference);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s\n", e.what());

@@ -8,7 +8,9 @@ foreach(module geometry motion eval io hand render synth slam scale)
   set(_ref "")
   foreach(f ${_all})
     get_filename_component(_n "${f}" NAME)
-    if(_n MATCHES "^ref_")
+    if(_n MATCHES "^amx_")
+      continue()  # the AMX target below
+    elseif(_n MATCHES "^ref_")
       list(APPEND _ref "${f}")
     else()
       list(APPEND _unit "${f}")
@@ -36,6 +38,29 @@ foreach(module geometry motion eval io hand render synth slam scale)
     hawor_add_test(test_${module}_ref SOURCES ${_ref} NATIVE_ONLY LABELS ${module} ref)
   endif()
 endforeach()
+
+# test_motion_amx: tests/motion/amx_*.cpp, the AMX backend of matmul.hpp and the infiller on it,
+# compiled with -mamx-tile -mamx-bf16 (the rest of the suite keeps the portable flags) where the
+# compiler has them, natively. Only the AMX flags: the binary runs on any x86-64 CPU and its
+# cases skip (a WARN) where the CPU or the kernel do not allow AMX. Two entries: the unit cases,
+# and the onnxruntime cross-check (label ref, needs node).
+if(NOT EMSCRIPTEN AND NOT HAWOR_SANITIZE)
+  include(CheckCXXCompilerFlag)
+  check_cxx_compiler_flag("-mamx-tile -mamx-bf16" HAWOR_HAS_AMX_FLAGS)
+  file(GLOB _amx CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/motion/amx_*.cpp")
+  if(HAWOR_HAS_AMX_FLAGS AND _amx)
+    add_executable(test_motion_amx ${_amx})
+    target_link_libraries(test_motion_amx PRIVATE hawor::hawor hawor_stb hawor_catch_main)
+    target_compile_definitions(test_motion_amx PRIVATE
+      HAWOR_SOURCE_DIR="${PROJECT_SOURCE_DIR}" HAWOR_REF_DIR="${HAWOR_REF_DIR}"
+      HAWOR_PYTHON="${HAWOR_PYTHON}")
+    target_compile_options(test_motion_amx PRIVATE -O1 -mamx-tile -mamx-bf16)
+    add_test(NAME test_motion_amx COMMAND test_motion_amx "~[ref]")
+    set_tests_properties(test_motion_amx PROPERTIES LABELS "native;motion;amx")
+    add_test(NAME test_motion_amx_ref COMMAND test_motion_amx "[ref]")
+    set_tests_properties(test_motion_amx_ref PROPERTIES LABELS "native;motion;amx;ref")
+  endif()
+endif()
 
 if(HAWOR_BUILD_EXAMPLES AND NOT EMSCRIPTEN AND NOT HAWOR_SANITIZE)
   file(GLOB _cli_tests CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/cli/test_*.py")

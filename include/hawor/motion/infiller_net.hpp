@@ -27,8 +27,10 @@
 // in stage 2, the PE table) follow it, so that converted weights reproduce its output.
 //
 // Cost: ≈ 8.7 GFLOP per 120-frame window (the feed-forwards are 70 %). Natively Eigen's GEMM
-// carries it; in WebAssembly the packed kernel of matmul.hpp. Memory: the weights (34.8 M
-// values: 139 MB in float, twice in double) and a workspace of 0.85 M values (3.4 MB in float).
+// carries it, or AMX tiles (bf16x3, matmul.hpp) for float in builds with AMX on CPUs that have
+// it (the layers' products; attention stays with Eigen); in WebAssembly the packed kernel.
+// Memory: the weights (34.8 M values: 139 MB in float, twice in double; AMX's bf16 hi + lo as
+// much as float) and a workspace of 0.85 M values (3.4 MB in float).
 // Thread-safety: forward() is const; concurrent calls need one InfillerWorkspace each. One call
 // may itself run on several threads (a ThreadPool: the window's frames split between them).
 #pragma once
@@ -84,7 +86,7 @@ struct InfillerWorkspace {
     part.resize(static_cast<size_t>(std::max(1, threads)));
     for (Part& p : part) {
       p.scores.resize(W, W);
-      p.scratch.resize(static_cast<size_t>(packedScratchSize(W, maxK)));
+      p.scratch.resize(static_cast<size_t>(matmulScratchSize(W, maxK)));
       p.keys.reserve(c.headDim(), W);
       p.values.reserve(W, c.headDim());
     }
@@ -93,7 +95,7 @@ struct InfillerWorkspace {
   /// Buffers of one thread.
   struct Part {
     RowMatrixX<Scalar> scores;         // its query rows × the window's keys
-    std::vector<Scalar> scratch;       // A packing of the packed backend
+    std::vector<Scalar> scratch;       // A packing of the packed and AMX backends
     PackedPanels<Scalar> keys, values; // one head's Kᵀ and V (packed backend)
   };
 
@@ -109,13 +111,16 @@ template <typename Scalar>
 class InfillerNet {
  public:
   /// Takes the weights (sizes and finiteness checked again: they may have been built in code)
-  /// and lays them out for `backend`.
+  /// and lays them out for `backend`, as resolveMatmulBackend<Scalar> resolves it (Auto: AMX
+  /// tiles, bf16x3, for float where the build and the CPU have them; else Eigen natively, the
+  /// packed kernel in WebAssembly). backend() tells which runs.
   explicit InfillerNet(const InfillerWeights<Scalar>& w,
-                       MatmulBackend backend = defaultMatmulBackend())
-      : config_(w.config), backend_(backend) {
+                       MatmulBackend backend = MatmulBackend::Auto)
+      : config_(w.config), backend_(resolveMatmulBackend<Scalar>(backend)) {
     checkInfillerWeights(w);
     const int D = config_.dModel;
     const VecX<Scalar> none;
+    backend = backend_;
     input_ = Linear<Scalar>(w.inputWeight, w.inputBias, backend);
     positional_ = w.positional.size() != 0
                       ? w.positional
@@ -153,7 +158,7 @@ class InfillerNet {
 
   /// Reads the weights file (infiller_weights.hpp) and builds the network.
   static InfillerNet read(const std::string& path, const InfillerConfig& config = {},
-                          MatmulBackend backend = defaultMatmulBackend()) {
+                          MatmulBackend backend = MatmulBackend::Auto) {
     return InfillerNet(readInfillerWeights<Scalar>(path, config), backend);
   }
 
@@ -329,7 +334,7 @@ class InfillerNet {
     const Eigen::Index ld = qkv.cols(), ldc = ws.ctx.cols();
     for (int hd = 0; hd < config_.heads; ++hd) {
       const Eigen::Index c = hd * dh;
-      if (backend_ == MatmulBackend::Eigen) {
+      if (backend_ != MatmulBackend::Packed) {  // Eigen; the AMX backend too (4 % of the work)
         S.noalias() = qkv.block(r0, c, R, dh) * qkv.block(0, D + c, T, dh).transpose();
       } else {
         part.keys.pack(qkv.data() + D + c, 1, ld, dh, T);  // k_hᵀ: dh × T
@@ -345,7 +350,7 @@ class InfillerNet {
         if (masked) r *= mask;
         r /= r.sum();
       }
-      if (backend_ == MatmulBackend::Eigen) {
+      if (backend_ != MatmulBackend::Packed) {
         ws.ctx.block(r0, c, R, dh).noalias() = S * qkv.block(0, 2 * D + c, T, dh);
       } else {
         part.values.pack(qkv.data() + 2 * D + c, ld, 1, T, dh);  // v_h: T × dh
