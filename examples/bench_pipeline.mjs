@@ -1,0 +1,221 @@
+// bench_pipeline.mjs: the whole pipeline (web/src/pipeline/run.mjs) end to end on synthetic
+// sequences with ground truth (`hawor synth`), one table on stdout.
+//
+//   node examples/bench_pipeline.mjs [--hawor build/native/examples/hawor] [--presets table_work,hands_cover,walk]
+//        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
+//        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
+//
+// Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
+// by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
+// focal length (or --fov DEG for the default guess) in two modes:
+//   network    the MediaPipe networks find the rendered hands (the real product path);
+//   simulated  the ground-truth keypoints projected into the image + Gaussian noise (--noise-px)
+//              and the camera-frame keypoints + noise (--noise-mm) as "world landmarks", fed to
+//              the same pipeline after perception (options.observations).
+// Metrics (DESIGN §8, the core's evaluateHands / evaluateCameras), per hand on the frames where
+// the hand is in view and was observed, then the mean of the two hands: PA-MPJPE, W-MPJPE,
+// WA-MPJPE (mm), RTE (%), Accel (m/s²); camera: ATE and ATE-S (mm, Sim(3) / SE(3) alignment);
+// found = observed / in-view frames; swaps = observed frames whose wrist is nearer the other
+// hand's true wrist. Timing: median over sequences of each stage's ms per frame.
+
+import { execFileSync } from 'node:child_process';
+import { existsSync, mkdirSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { decodeFrames, handModelFiles, loadCore, probeVideo } from '../web/cli.mjs';
+import { runPipeline } from '../web/src/pipeline/run.mjs';
+
+const repo = resolve(dirname(fileURLToPath(import.meta.url)), '..');
+
+function parse(argv) {
+  const o = {
+    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), presets: ['table_work', 'hands_cover', 'walk'],
+    seeds: [3], frames: 90, size: '640x480', modes: ['network', 'simulated'], model: 'lite', threads: 2, noisePx: 2, noiseMm: 5,
+    work: join(tmpdir(), 'hawor_bench_pipeline'), core: process.env.HAWOR_CORE ?? join(repo, 'build', 'wasm', 'wasm', 'hawor_core.mjs'),
+  };
+  for (let i = 0; i < argv.length; ++i) {
+    const a = argv[i];
+    const v = () => argv[++i];
+    if (a === '--hawor') o.hawor = v();
+    else if (a === '--presets') o.presets = v().split(',');
+    else if (a === '--seeds') o.seeds = v().split(',').map(Number);
+    else if (a === '--frames') o.frames = Number(v());
+    else if (a === '--size') o.size = v();
+    else if (a === '--mode') o.modes = v().split(',');
+    else if (a === '--model') o.model = v();
+    else if (a === '--threads') o.threads = Number(v());
+    else if (a === '--noise-px') o.noisePx = Number(v());
+    else if (a === '--noise-mm') o.noiseMm = Number(v());
+    else if (a === '--fov') o.fov = Number(v());
+    else if (a === '--work') o.work = v();
+    else if (a === '--core') o.core = v();
+    else if (a === '--json') o.json = v();
+    else throw new Error(`unknown argument ${a}`);
+  }
+  return o;
+}
+
+// Deterministic noise (mulberry32 + Box-Muller).
+function rng(seed) {
+  let s = seed | 0;
+  const u = () => {
+    s = (s + 0x6d2b79f5) | 0;
+    let t = Math.imul(s ^ (s >>> 15), 1 | s);
+    t = (t + Math.imul(t ^ (t >>> 7), 61 | t)) ^ t;
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+  return () => Math.sqrt(-2 * Math.log(u() + 1e-300)) * Math.cos(2 * Math.PI * u());
+}
+
+export function readTumPositions(file) {
+  const rows = readFileSync(file, 'utf8').split('\n').filter((l) => l.trim() && !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
+  return Float64Array.from(rows.flatMap((r) => [r[1], r[2], r[3]]));
+}
+
+/** Makes (or reuses) a synthetic sequence and its H.264 video. */
+export function makeSequence(hawor, preset, seed, frames, size, dir) {
+  if (!existsSync(join(dir, 'video.mp4'))) {
+    const glb = join(repo, 'node_modules', '@webxr-input-profiles', 'assets', 'dist', 'profiles', 'generic-hand');
+    const env = { ...process.env };
+    if (!env.HAWOR_HAND_DIR && !existsSync(join(dirname(hawor), '..', 'models', 'hand_right.npz'))) env.HAWOR_HAND_DIR = glb;
+    execFileSync(hawor, ['synth', '--preset', preset, '--seed', String(seed), '--frames', String(frames), '--size', size, '--out', dir], { env, stdio: ['ignore', 'ignore', 'inherit'] });
+    execFileSync('ffmpeg', ['-v', 'error', '-y', '-framerate', '30', '-i', join(dir, 'rgb', '%06d.png'), '-c:v', 'libx264', '-crf', '12',
+      '-pix_fmt', 'yuv420p', join(dir, 'video.mp4')]);
+  }
+  const [fx, fy, cx, cy, W, H, fps] = readFileSync(join(dir, 'intrinsics.txt'), 'utf8').trim().split(/\s+/).map(Number);
+  return { dir, fx, fy, cx, cy, W, H, fps };
+}
+
+/** Simulated perception: GT keypoints projected + noise (options.observations). */
+export function simulatedObservations(gt, seq, T, noisePx, noiseMm, seed) {
+  const n = rng(seed);
+  return (t) => {
+    const out = [];
+    for (const side of ['left', 'right']) {
+      if (!gt[`${side}_valid`].data[t]) continue;
+      const inImg = gt[`${side}_kp_in_image`].data.subarray(21 * t, 21 * t + 21);
+      if (inImg.reduce((a, v) => a + (v ? 1 : 0), 0) < 15) continue; // mostly out of view: a detector would miss it
+      const jc = gt[`${side}_joints_cam`].data.subarray(63 * t, 63 * t + 63);
+      const landmarks = new Float32Array(42);
+      const world = new Float32Array(63);
+      for (let k = 0; k < 21; ++k) {
+        const [x, y, z] = [jc[3 * k], jc[3 * k + 1], jc[3 * k + 2]];
+        landmarks[2 * k] = seq.fx * (x / z) + seq.cx + noisePx * n();
+        landmarks[2 * k + 1] = seq.fy * (y / z) + seq.cy + noisePx * n();
+        for (let a = 0; a < 3; ++a) world[3 * k + a] = jc[3 * k + a] - jc[a] + 1e-3 * noiseMm * n();
+      }
+      out.push({ handedness: side, handednessScore: 0.95, landmarks, world });
+    }
+    return out;
+  };
+}
+
+/** Accuracy of a result against a sequence's ground truth. */
+export function evaluate(core, result, gt, seq, gtCam) {
+  const T = result.frameCount;
+  const cam = core.evaluateCameras(gtCam, result.camera.positions);
+  const perHand = {};
+  for (const side of ['left', 'right']) {
+    const h = result.hands[side];
+    const gv = gt[`${side}_valid`].data;
+    const valid = new Uint8Array(T);
+    let inView = 0; let observed = 0; let swaps = 0;
+    const other = side === 'left' ? 'right' : 'left';
+    for (let t = 0; t < T; ++t) {
+      if (gv[t]) inView += 1;
+      if (gv[t] && h.valid[t]) {
+        valid[t] = 1; observed += 1;
+        // wrist in the image vs both true wrists
+        const proj = (jc) => [seq.fx * (jc[0] / jc[2]) + seq.cx, seq.fy * (jc[1] / jc[2]) + seq.cy];
+        const me = proj(gt[`${side}_joints_cam`].data.subarray(63 * t, 63 * t + 3));
+        const kp = h.keypoints2d.subarray(42 * t, 42 * t + 2);
+        const dMe = Math.hypot(kp[0] - me[0], kp[1] - me[1]);
+        if (gt[`${other}_valid`].data[t]) {
+          const ot = proj(gt[`${other}_joints_cam`].data.subarray(63 * t, 63 * t + 3));
+          if (Math.hypot(kp[0] - ot[0], kp[1] - ot[1]) < dMe) swaps += 1;
+        }
+      }
+    }
+    const clean = (a) => a.map((v) => (Number.isFinite(v) ? v : 0));
+    let m = null;
+    if (observed >= 3) {
+      m = core.evaluateHands(gt[`${side}_joints_world`].data, clean(h.jointsWorld), gt[`${side}_joints_cam`].data, clean(h.jointsCam), T, valid, seq.fps);
+    }
+    perHand[side] = { inView, observed, swaps, metrics: m };
+  }
+  return { ate: cam.ate, ate_s: cam.ate_s, simScale: cam.scale, perHand };
+}
+
+const median = (a) => { const s = a.filter(Number.isFinite).sort((x, y) => x - y); return s.length ? s[Math.floor((s.length - 1) / 2)] * 0.5 + s[Math.ceil((s.length - 1) / 2)] * 0.5 : NaN; };
+const mean = (a) => { const s = a.filter(Number.isFinite); return s.length ? s.reduce((x, y) => x + y, 0) / s.length : NaN; };
+
+async function main() {
+  const o = parse(process.argv.slice(2));
+  if (!existsSync(o.hawor)) throw new Error(`${o.hawor}: the native hawor CLI is missing (it generates the sequences)`);
+  const core = await loadCore(o.core);
+  const ort = await import('onnxruntime-web');
+  ort.env.wasm.numThreads = o.threads;
+  ort.env.logLevel = 'error';
+  const models = {
+    palm: new Uint8Array(readFileSync(join(repo, 'web', 'models', `palm_detection_${o.model}.onnx`))),
+    landmark: new Uint8Array(readFileSync(join(repo, 'web', 'models', `hand_landmark_${o.model}.onnx`))),
+  };
+  const hm = handModelFiles({});
+  const handModels = { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right };
+  mkdirSync(o.work, { recursive: true });
+  const rows = [];
+  for (const preset of o.presets) {
+    for (const seed of o.seeds) {
+      const seq = makeSequence(o.hawor, preset, seed, o.frames, o.size, join(o.work, `${preset}_${seed}_${o.frames}_${o.size}`));
+      const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
+      const gtCam = readTumPositions(join(seq.dir, 'camera_gt.tum'));
+      const info = probeVideo(join(seq.dir, 'video.mp4'));
+      for (const mode of o.modes) {
+        const timing = { decode: 0 };
+        const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
+          frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
+        const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
+          ...(o.fov ? { fovDeg: o.fov } : { focalPx: seq.fx }) };
+        if (mode === 'simulated') options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
+        const t0 = performance.now();
+        const result = await runPipeline(source, options, {});
+        const wall = performance.now() - t0;
+        const ev = evaluate(core, result, gt, seq, gtCam);
+        const T = result.frameCount;
+        const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
+        const row = {
+          sequence: `${preset}/${seed}`, mode, frames: T,
+          found: hands.length ? `${ev.perHand.left.observed + ev.perHand.right.observed}/${ev.perHand.left.inView + ev.perHand.right.inView}` : '0',
+          swaps: ev.perHand.left.swaps + ev.perHand.right.swaps,
+          pa_mpjpe: mean(hands.map((h) => h.metrics.pa_mpjpe)), w_mpjpe: mean(hands.map((h) => h.metrics.w_mpjpe)),
+          wa_mpjpe: mean(hands.map((h) => h.metrics.wa_mpjpe)), rte: mean(hands.map((h) => h.metrics.rte)), accel: mean(hands.map((h) => h.metrics.accel)),
+          ate: ev.ate, ate_s: ev.ate_s, scale: 1 / ev.simScale, scaleMethod: result.scale.method,
+          msPerFrame: Object.fromEntries(Object.entries({ decode: timing.decode, ...result.timings }).filter(([k]) => k !== 'load').map(([k, v]) => [k, v / T])),
+          wallMsPerFrame: (wall + timing.decode * 0) / T,
+          warnings: result.warnings,
+        };
+        rows.push(row);
+        process.stderr.write(`${JSON.stringify(row)}\n`);
+      }
+    }
+  }
+  const f = (v, d = 1) => (Number.isFinite(v) ? v.toFixed(d) : '–');
+  console.log(`\n${o.size}, ${o.frames} frames, ${o.model} networks, ${o.threads} threads, focal ${o.fov ? `from a ${o.fov}° diagonal FOV` : 'true'}; simulated noise ${o.noisePx} px / ${o.noiseMm} mm`);
+  console.log('| sequence | mode | found | swaps | PA-MPJPE | W-MPJPE | WA-MPJPE | RTE % | Accel | ATE | ATE-S | α/α_true | ms/frame |');
+  console.log('| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |');
+  for (const r of rows) {
+    console.log(`| ${r.sequence} | ${r.mode} | ${r.found} | ${r.swaps} | ${f(r.pa_mpjpe)} | ${f(r.w_mpjpe)} | ${f(r.wa_mpjpe)} | ${f(r.rte, 2)} | ${f(r.accel, 2)} | ${f(r.ate)} | ${f(r.ate_s)} | ${f(r.scale, 3)} (${r.scaleMethod}) | ${f(r.wallMsPerFrame, 0)} |`);
+  }
+  for (const mode of o.modes) {
+    const rs = rows.filter((r) => r.mode === mode);
+    if (!rs.length) continue;
+    const stages = [...new Set(rs.flatMap((r) => Object.keys(r.msPerFrame)))];
+    console.log(`\nms per frame, median over sequences (${mode}): ${stages.map((s) => `${s} ${f(median(rs.map((r) => r.msPerFrame[s] ?? 0)))}`).join(', ')}; total ${f(median(rs.map((r) => Object.values(r.msPerFrame).reduce((a, b) => a + b, 0))))}`);
+  }
+  if (o.json) writeFileSync(o.json, JSON.stringify(rows, null, 1));
+}
+
+if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
+  main().catch((e) => { process.stderr.write(`bench_pipeline: ${e.stack}\n`); process.exitCode = 1; });
+}

@@ -1,0 +1,266 @@
+#!/usr/bin/env node
+// cli.mjs: the headless hawor pipeline on a video file (node glue only: arguments, ffmpeg
+// decoding, progress, files; every algorithm is in web/src/pipeline/run.mjs and the C++ core).
+//
+//   node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--mano DIR]
+//        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
+//        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
+//
+// Writes DIR/world.npz, DIR/hands_cam.npz, DIR/camera.tum and DIR/result.json (exports.mjs
+// describes them), prints a progress bar and a per-stage timing table on stderr and one JSON
+// summary line on stdout. Frames are decoded by ffmpeg (Debian's) as a stream of RGB frames;
+// videos above 8.3 Mpx (4096x2304) are downscaled by ffmpeg to 1920 px on the long side (said on
+// stderr). Exit codes: 2 usage error, 1 bad input (the message names it), 0 success (also when
+// no hand was found: result.json says "noHands": true).
+//
+// Defaults: the core from $HAWOR_CORE or build/wasm/wasm/hawor_core.mjs; hand models from
+// --mano DIR (MANO_LEFT/RIGHT .pkl or .npz), else $HAWOR_HAND_DIR or build/native/models
+// (hand_{left,right}.npz), else the WebXR glTF hands in node_modules; perception networks from
+// web/models (scripts/install.sh converts them).
+
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+import { runPipeline, MAX_PIXELS } from './src/pipeline/run.mjs';
+import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const repo = resolve(here, '..');
+const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]';
+
+const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
+const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
+
+export function parseArgs(argv) {
+  if (argv[0] === '--help' || argv[0] === '-h') return { help: true };
+  if (argv[0] !== 'run') throw usage(argv.length ? `unknown command '${argv[0]}'` : 'missing command');
+  const o = { model: 'lite', threads: 2, infill: 'spline', models: join(repo, 'web', 'models') };
+  const num = (v, name, min) => {
+    const n = Number(v);
+    if (!Number.isFinite(n) || n <= min) throw usage(`${name} must be a number > ${min}, not '${v}'`);
+    return n;
+  };
+  for (let i = 1; i < argv.length; ++i) {
+    const a = argv[i];
+    const next = () => { if (i + 1 >= argv.length) throw usage(`${a} needs a value`); return argv[++i]; };
+    if (a === '--out') o.out = next();
+    else if (a === '--focal') o.focalPx = num(next(), '--focal', 0);
+    else if (a === '--fov') { o.fovDeg = num(next(), '--fov', 1); if (o.fovDeg >= 179) throw usage('--fov must be below 179 degrees'); }
+    else if (a === '--mano') o.mano = next();
+    else if (a === '--depth-model') o.depthModel = next();
+    else if (a === '--depth-config') o.depthConfig = next();
+    else if (a === '--model') { o.model = next(); if (!['lite', 'full'].includes(o.model)) throw usage(`--model must be lite or full, not '${o.model}'`); }
+    else if (a === '--threads') { o.threads = num(next(), '--threads', 0); if (!Number.isInteger(o.threads)) throw usage('--threads must be an integer'); }
+    else if (a === '--core') o.core = next();
+    else if (a === '--models') o.models = next();
+    else if (a === '--max-frames') { o.maxFrames = num(next(), '--max-frames', 0); if (!Number.isInteger(o.maxFrames)) throw usage('--max-frames must be an integer'); }
+    else if (a === '--infill') { o.infill = next(); if (!['spline', 'lerp', 'last'].includes(o.infill)) throw usage(`--infill must be spline, lerp or last, not '${o.infill}'`); }
+    else if (a === '--help' || a === '-h') return { help: true };
+    else if (a.startsWith('--')) throw usage(`unknown option '${a}'`);
+    else if (!o.video) o.video = a;
+    else throw usage(`unexpected argument '${a}'`);
+  }
+  if (!o.video) throw usage('missing VIDEO');
+  if (!o.out) throw usage('--out DIR is required');
+  if (o.focalPx !== undefined && o.fovDeg !== undefined) throw usage('give --focal or --fov, not both');
+  if (o.depthConfig && !o.depthModel) throw usage('--depth-config needs --depth-model');
+  return o;
+}
+
+/** ffprobe: width, height, fps, frame count (null when the container does not say). */
+export function probeVideo(video) {
+  const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries',
+    'stream=width,height,r_frame_rate,avg_frame_rate,nb_frames', '-of', 'json', video], { encoding: 'utf8' });
+  if (r.error) throw fail('ffprobe is not installed (apt-get install ffmpeg)');
+  let s = null;
+  try { s = JSON.parse(r.stdout).streams?.[0] ?? null; } catch { s = null; }
+  if (r.status !== 0 || !s || !(s.width > 0 && s.height > 0)) {
+    const why = (r.stderr || '').trim().split('\n').pop() || 'no video stream';
+    throw fail(`${video}: not a readable video (${why})`);
+  }
+  const rate = (txt) => { const [a, b] = String(txt ?? '').split('/').map(Number); return a > 0 && b > 0 ? a / b : NaN; };
+  let fps = rate(s.avg_frame_rate);
+  if (!(fps > 0 && fps < 1000)) fps = rate(s.r_frame_rate);
+  if (!(fps > 0 && fps < 1000)) fps = 30;
+  const n = Number(s.nb_frames);
+  return { width: s.width, height: s.height, fps, frameCount: Number.isInteger(n) && n > 0 ? n : null };
+}
+
+/** Frames from one ffmpeg process as RGB24, one preallocated buffer per frame (backpressure:
+ *  the pipe is read only as fast as the pipeline consumes frames). */
+export async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
+  const args = ['-v', 'error', '-nostdin', '-i', video, '-an', '-sn'];
+  if (scaleTo) args.push('-vf', `scale=${scaleTo.width}:${scaleTo.height}:flags=area`);
+  if (maxFrames) args.push('-frames:v', String(maxFrames));
+  args.push('-f', 'rawvideo', '-pix_fmt', 'rgb24', '-');
+  const ff = spawn('ffmpeg', args, { stdio: ['ignore', 'pipe', 'pipe'] });
+  let err = '';
+  ff.stderr.on('data', (d) => { if (err.length < 1e4) err += d; });
+  const closed = new Promise((res) => ff.on('close', (code) => res(code)));
+  const size = width * height * 3;
+  let frame = new Uint8Array(size);
+  let fill = 0;
+  let index = 0;
+  let t = performance.now();
+  try {
+    for await (const chunk of ff.stdout) {
+      let off = 0;
+      while (off < chunk.length) {
+        const n = Math.min(size - fill, chunk.length - off);
+        frame.set(chunk.subarray(off, off + n), fill);
+        fill += n; off += n;
+        if (fill === size) {
+          timing.decode += performance.now() - t;
+          yield { index: index++, rgba: frame };
+          t = performance.now();
+          frame = new Uint8Array(size);
+          fill = 0;
+        }
+      }
+    }
+  } finally {
+    if (ff.exitCode === null) ff.kill();
+  }
+  const code = await closed;
+  if (code !== 0 && err.trim()) throw fail(`ffmpeg: ${err.trim().split('\n').pop()}`);
+}
+
+export async function loadCore(path) {
+  if (!existsSync(path)) throw fail(`${path}: the WebAssembly core is missing (emcmake cmake -S . -B build/wasm && cmake --build build/wasm --target hawor_core), or give --core`);
+  globalThis.require ??= createRequire(import.meta.url);
+  globalThis.__dirname = dirname(resolve(path));
+  const { default: create } = await import(pathToFileURL(resolve(path)).href);
+  const dir = dirname(resolve(path));
+  // The .wasm bytes are handed over directly: node 20's fetch cannot read file paths (otherwise
+  // node would need --no-experimental-fetch, DESIGN §9).
+  const wasm = join(dir, 'hawor_core.wasm');
+  if (!existsSync(wasm)) throw fail(`${wasm}: missing next to the core`);
+  return create({ locateFile: (f) => join(dir, f), wasmBinary: readFileSync(wasm) });
+}
+
+export function handModelFiles(o) {
+  if (o.mano) {
+    const pick = (side) => {
+      for (const n of [`MANO_${side.toUpperCase()}.pkl`, `MANO_${side.toUpperCase()}.npz`, `mano_${side}.pkl`, `mano_${side}.npz`]) {
+        if (existsSync(join(o.mano, n))) return join(o.mano, n);
+      }
+      throw fail(`${o.mano}: no MANO_${side.toUpperCase()}.pkl or .npz there`);
+    };
+    return { left: pick('left'), right: pick('right') };
+  }
+  const dirs = [process.env.HAWOR_HAND_DIR, join(repo, 'build', 'native', 'models')].filter(Boolean);
+  for (const d of dirs) {
+    const l = join(d, 'hand_left.npz');
+    const r = join(d, 'hand_right.npz');
+    if (existsSync(l) && existsSync(r)) return { left: l, right: r };
+  }
+  const glb = join(repo, 'node_modules', '@webxr-input-profiles', 'assets', 'dist', 'profiles', 'generic-hand');
+  if (existsSync(join(glb, 'left.glb')) && existsSync(join(glb, 'right.glb'))) return { left: join(glb, 'left.glb'), right: join(glb, 'right.glb') };
+  throw fail('no hand model: give --mano DIR, set HAWOR_HAND_DIR, or build the default hands (cmake --build build/native --target default_hands)');
+}
+
+function progressBar(total) {
+  const tty = process.stderr.isTTY;
+  let lastPct = -1;
+  const t0 = performance.now();
+  return ({ stage, done, total: tot }) => {
+    const n = tot ?? total;
+    if (stage !== 'frames') {
+      if (tty) process.stderr.write('\n');
+      if (stage !== 'done') process.stderr.write(`hawor: ${stage}...\n`);
+      return;
+    }
+    const ms = (performance.now() - t0) / done;
+    if (tty) {
+      const frac = n ? Math.min(1, done / n) : 0;
+      const w = 30;
+      const bar = n ? `[${'#'.repeat(Math.round(frac * w)).padEnd(w, '.')}] ` : '';
+      process.stderr.write(`\r${bar}${done}${n ? `/${n}` : ''} frames, ${ms.toFixed(0)} ms/frame   `);
+    } else {
+      const pct = n ? Math.floor((10 * done) / n) * 10 : Math.floor(done / 50) * 50;
+      if (pct !== lastPct) { lastPct = pct; process.stderr.write(`hawor: ${done}${n ? `/${n}` : ''} frames (${ms.toFixed(0)} ms/frame)\n`); }
+    }
+  };
+}
+
+function timingTable(timings, frames) {
+  const rows = Object.entries(timings).filter(([, v]) => v > 0);
+  const total = rows.filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0);
+  const lines = ['stage          total ms   ms/frame   share'];
+  for (const [k, v] of rows) {
+    lines.push(`${k.padEnd(14)} ${v.toFixed(0).padStart(8)}   ${(v / frames).toFixed(1).padStart(8)}   ${k === 'load' ? '  (once)' : `${((100 * v) / total).toFixed(1).padStart(5)} %`}`);
+  }
+  lines.push(`${'total'.padEnd(14)} ${total.toFixed(0).padStart(8)}   ${(total / frames).toFixed(1).padStart(8)}   (without load)`);
+  return lines.join('\n');
+}
+
+export async function main(argv) {
+  const o = parseArgs(argv);
+  if (o.help) { process.stdout.write(`${USAGE}\n`); return 0; }
+  if (!existsSync(o.video)) throw fail(`${o.video}: no such file`);
+  const palm = join(o.models, `palm_detection_${o.model}.onnx`);
+  const lm = join(o.models, `hand_landmark_${o.model}.onnx`);
+  for (const f of [palm, lm]) if (!existsSync(f)) throw fail(`${f}: missing (scripts/install.sh converts the models)`);
+  const info = probeVideo(o.video);
+  let { width, height } = info;
+  let scaleTo = null;
+  if (width * height > MAX_PIXELS) {
+    const s = 1920 / Math.max(width, height);
+    scaleTo = { width: 2 * Math.round((width * s) / 2), height: 2 * Math.round((height * s) / 2) };
+    process.stderr.write(`hawor: ${width}x${height} is above ${(MAX_PIXELS / 1e6).toFixed(1)} Mpx: decoding at ${scaleTo.width}x${scaleTo.height} (intrinsics refer to that size)\n`);
+    ({ width, height } = scaleTo);
+  }
+  const hm = handModelFiles(o);
+  const handModels = { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right };
+  let depthModel;
+  if (o.depthModel) {
+    const cfg = o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json');
+    if (!existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
+    if (!existsSync(cfg)) throw fail(`${cfg}: the depth model's config is missing (give --depth-config)`);
+    depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(cfg, 'utf8') };
+  }
+  const tLoad = performance.now();
+  const core = await loadCore(o.core ?? process.env.HAWOR_CORE ?? join(repo, 'build', 'wasm', 'wasm', 'hawor_core.mjs'));
+  const ort = await import('onnxruntime-web');
+  ort.env.wasm.numThreads = o.threads;
+  ort.env.logLevel = 'error';
+  const coreLoadMs = performance.now() - tLoad;
+  const decodeTiming = { decode: 0 };
+  const total = o.maxFrames ? Math.min(o.maxFrames, info.frameCount ?? Infinity) : info.frameCount;
+  const source = { width, height, fps: info.fps, frameCount: Number.isFinite(total) ? total : null,
+    frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming) };
+  const result = await runPipeline(source, {
+    core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
+    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
+  }, { onProgress: progressBar(source.frameCount) });
+  result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
+  if (scaleTo) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
+  const tw = performance.now();
+  mkdirSync(o.out, { recursive: true });
+  writeFileSync(join(o.out, 'world.npz'), resultToWorldNpz(result));
+  writeFileSync(join(o.out, 'hands_cam.npz'), resultToHandsCamNpz(result));
+  writeFileSync(join(o.out, 'camera.tum'), resultToTum(result));
+  result.timings.write = performance.now() - tw;
+  writeFileSync(join(o.out, 'result.json'), resultToJson(result));
+  const T = result.frameCount;
+  process.stderr.write(`${timingTable(result.timings, T)}\n`);
+  for (const w of result.warnings) process.stderr.write(`hawor: warning: ${w}\n`);
+  const count = (a) => Array.from(a).reduce((s, v) => s + (v ? 1 : 0), 0);
+  const summary = {
+    out: o.out, frames: T, width, height, fps: result.fps, focal: result.intrinsics.fx, focalSource: result.intrinsics.focalSource,
+    noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
+    scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,
+    msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),
+  };
+  process.stdout.write(`${JSON.stringify(summary)}\n`);
+  return 0;
+}
+
+if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
+  main(process.argv.slice(2)).then((c) => { process.exitCode = c; }, (e) => {
+    process.stderr.write(`hawor: ${e.message}\n`);
+    process.exitCode = e.exitCode ?? 1;
+  });
+}

@@ -1,0 +1,104 @@
+// exports.mjs: the files a pipeline result (run.mjs) is saved as, shared by the node CLI and the
+// browser app (pure JavaScript, no node import). Each function returns the file's content.
+//
+//   resultToWorldNpz(result)    -> Uint8Array  world.npz: per hand (prefixes left_ / right_) the
+//       original's world-space keys trans (T,3), rot (T,3) axis-angle, hand_pose (T,P) (P = 45
+//       for MANO, 3(J-1) for other skinned hands), betas (T,B) (10 for MANO, 0 for the default
+//       hand), joints_world (T,21,3), valid (T,) bool (observed), infilled (T,) bool; float64;
+//       plus timestamps (T,) and fps (scalar). A hand never seen holds NaN with valid all false.
+//   resultToHandsCamNpz(result) -> Uint8Array  hands_cam.npz: per hand cam_rot, cam_trans (T,3),
+//       hand_pose, betas, joints_cam (T,21,3), keypoints2d (T,21,2) image pixels, valid (T,),
+//       reproj_rms_px (T,); NaN where not observed; plus intrinsics (4,) fx fy cx cy.
+//   resultToTum(result)         -> string      camera.tum: "t tx ty tz qx qy qz qw" per frame,
+//       camera-to-world, metres (the estimated metric scale applied).
+//   resultToJson(result)        -> string      result.json: the result object itself, typed
+//       arrays as plain arrays, NaN / Infinity as null.
+// The .npz files are stored (uncompressed) ZIPs of .npy members, as np.savez writes them.
+
+import { encodeStoredZip } from '../../tools/npz.mjs';
+
+const DTYPES = new Map([
+  [Float64Array, '<f8'], [Float32Array, '<f4'], [Int32Array, '<i4'], [Uint8Array, '|u1'],
+]);
+
+/** One .npy (format 1.0, C order) of a typed array; bool: true stores a Uint8Array as '|b1'. */
+export function encodeNpy(data, shape, { bool = false } = {}) {
+  const descr = bool ? '|b1' : DTYPES.get(data.constructor);
+  if (!descr) throw new Error(`npy: unsupported array type ${data.constructor.name}`);
+  const count = shape.reduce((a, b) => a * b, 1);
+  if (count !== data.length) throw new Error(`npy: ${data.length} values for shape (${shape.join(', ')})`);
+  const shapeText = shape.length === 1 ? `(${shape[0]},)` : `(${shape.join(', ')})`;
+  let header = `{'descr': '${descr}', 'fortran_order': False, 'shape': ${shapeText}, }`;
+  const fixed = 10;
+  const total = Math.ceil((fixed + header.length + 1) / 64) * 64;
+  header = header.padEnd(total - fixed - 1, ' ') + '\n';
+  const out = new Uint8Array(total + data.byteLength);
+  out.set([0x93, 0x4e, 0x55, 0x4d, 0x50, 0x59, 1, 0, header.length & 0xff, header.length >> 8], 0);
+  for (let i = 0; i < header.length; ++i) out[fixed + i] = header.charCodeAt(i);
+  out.set(new Uint8Array(data.buffer, data.byteOffset, data.byteLength), total);
+  return out;
+}
+
+/** An .npz of [[name, {data, shape, bool?}], ...]. */
+export function encodeNpz(list) {
+  return encodeStoredZip(list.map(([name, a]) => ({ name: `${name}.npy`, bytes: encodeNpy(a.data, a.shape, { bool: !!a.bool }) })));
+}
+
+const f64 = (a) => (a instanceof Float64Array ? a : Float64Array.from(a ?? []));
+const u8 = (a) => Uint8Array.from(a ?? [], (v) => (v ? 1 : 0));
+
+export function resultToWorldNpz(result) {
+  const T = result.frameCount;
+  const list = [];
+  for (const side of ['left', 'right']) {
+    const h = result.hands[side];
+    const p = `${side}_`;
+    list.push([`${p}trans`, { data: f64(h.trans), shape: [T, 3] }]);
+    list.push([`${p}rot`, { data: f64(h.rot), shape: [T, 3] }]);
+    list.push([`${p}hand_pose`, { data: f64(h.handPose), shape: [T, h.handPoseCols] }]);
+    list.push([`${p}betas`, { data: f64(h.betas), shape: [T, h.betaCols] }]);
+    list.push([`${p}joints_world`, { data: f64(h.jointsWorld), shape: [T, 21, 3] }]);
+    list.push([`${p}valid`, { data: u8(h.valid), shape: [T], bool: true }]);
+    list.push([`${p}infilled`, { data: u8(h.infilled), shape: [T], bool: true }]);
+  }
+  list.push(['timestamps', { data: f64(result.camera.timestamps), shape: [T] }]);
+  list.push(['fps', { data: Float64Array.of(result.fps), shape: [] }]);
+  return encodeNpz(list);
+}
+
+export function resultToHandsCamNpz(result) {
+  const T = result.frameCount;
+  const list = [];
+  for (const side of ['left', 'right']) {
+    const h = result.hands[side];
+    const p = `${side}_`;
+    list.push([`${p}cam_rot`, { data: f64(h.camRot), shape: [T, 3] }]);
+    list.push([`${p}cam_trans`, { data: f64(h.camTrans), shape: [T, 3] }]);
+    list.push([`${p}joints_cam`, { data: f64(h.jointsCam), shape: [T, 21, 3] }]);
+    list.push([`${p}keypoints2d`, { data: f64(h.keypoints2d), shape: [T, 21, 2] }]);
+    list.push([`${p}valid`, { data: u8(h.valid), shape: [T], bool: true }]);
+    list.push([`${p}reproj_rms_px`, { data: f64(h.reprojRmsPx), shape: [T] }]);
+  }
+  const k = result.intrinsics;
+  list.push(['intrinsics', { data: Float64Array.of(k.fx, k.fy, k.cx, k.cy), shape: [4] }]);
+  return encodeNpz(list);
+}
+
+export function resultToTum(result) {
+  const { positions: p, quaternions: q, timestamps: ts } = result.camera;
+  const lines = ['# camera-to-world, metres (hawor pipeline): t tx ty tz qx qy qz qw'];
+  for (let t = 0; t < result.frameCount; ++t) {
+    const row = [ts[t], p[3 * t], p[3 * t + 1], p[3 * t + 2], q[4 * t], q[4 * t + 1], q[4 * t + 2], q[4 * t + 3]];
+    lines.push(row.map((v) => (Number.isFinite(v) ? Number(v.toPrecision(12)).toString() : 'nan')).join(' '));
+  }
+  return `${lines.join('\n')}\n`;
+}
+
+/** JSON text of the result: typed arrays as arrays, non-finite numbers as null. */
+export function resultToJson(result, space = 0) {
+  return JSON.stringify(result, (key, v) => {
+    if (ArrayBuffer.isView(v)) return Array.from(v, (x) => (Number.isFinite(x) ? x : null));
+    if (typeof v === 'number' && !Number.isFinite(v)) return null;
+    return v;
+  }, space);
+}

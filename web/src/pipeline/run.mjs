@@ -1,0 +1,591 @@
+// run.mjs: the whole hawor pipeline on a stream of video frames, shared by the node CLI
+// (web/cli.mjs) and the browser app (a Web Worker). No node-only import: the caller passes the
+// C++ core (hawor_core.mjs, instantiated), the onnxruntime-web namespace and the bytes of every
+// model, and feeds frames as RGBA (or RGB) byte arrays.
+//
+//   import { runPipeline } from './pipeline/run.mjs';
+//   const result = await runPipeline(source, options, hooks);
+//
+// source  { width, height, fps, frameCount: number | null,
+//           frames: async iterable of { index, rgba: Uint8Array | Uint8ClampedArray } }
+//         rgba holds width*height*4 bytes (canvas ImageData) or width*height*3 (RGB from a
+//         decoder); frames are consumed one at a time and not kept (except, with a depth model,
+//         a copy at the SLAM resolution, see below).
+// options { core, ort,
+//           models: { palm: Uint8Array, landmark: Uint8Array }     ONNX bytes (or
+//                   { palmSession, landmarkSession }: onnxruntime sessions already made),
+//           handModels: { left: Uint8Array, right: Uint8Array,     any file the core reads
+//                         leftName?, rightName? },                 (default hand .npz/.glb, MANO
+//                                                                  .pkl/.npz); names help the
+//                                                                  format check only
+//           focalPx?, fovDeg?            focal length in pixels, or a diagonal field of view;
+//                                        default: DEFAULT_DIAGONAL_FOV_DEG on the diagonal
+//           modelKind: 'lite' | 'full'   recorded in the result (the caller picks the bytes)
+//           depthModel?: { bytes, config }   a metric-depth ONNX + its JSON config (the slot of
+//                                        web/src/depth_model.mjs), run on the SLAM keyframes
+//           threads?                     recorded (the caller sets ort.env.wasm.numThreads)
+//           slamMaxSide? (640)           the SLAM and hand masks run on frames downscaled to
+//                                        this long side (intrinsics scaled alike)
+//           maxPixels? (MAX_PIXELS)      larger frames are refused with a clear error (the
+//                                        caller downscales first; the CLI does, with ffmpeg)
+//           observations?: (index) => [{ handedness: 'left'|'right', handednessScore?,
+//                                        landmarks: (2 or 3 per keypoint, 21) image px,
+//                                        world: (63) metres | null }]
+//                                        replaces the perception networks (benchmarks with
+//                                        simulated keypoints); ort and models are then unused
+//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2) }
+// hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
+//         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
+//         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
+//         before every frame and between the stages after the last one).
+//
+// The result (what result.json holds; flat numeric arrays are typed arrays here, plain arrays
+// in the JSON; NaN becomes null in the JSON):
+// { version: 1, width, height, fps, frameCount,
+//   modelKind, threads,
+//   intrinsics: { fx, fy, cx, cy, focalSource: 'user-focal' | 'user-fov' | 'default-fov',
+//                 fovDeg (diagonal), refined: false },
+//   slam: { width, height, numKeyframes, numLosses, numResets, initialised },
+//   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
+//             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
+//             3 relocalised), timestamps (T, seconds) },
+//   points: (N*3) world points in metres (the SLAM keyframes' depths back-projected), may be empty,
+//   scale: { scale, method: 'depth'|'hands'|'fused'|'none', confidence, ... (metricScale's fields) },
+//   hands: { left: Hand, right: Hand },  Hand = {
+//     valid (T: observed and fitted), infilled (T: filled by the infiller), present (any frame),
+//     trans (T*3), rot (T*3 axis-angle), handPose (T*P), betas (T*B)   world frame, metres;
+//                                      P = 3*(J-1) of the model (45 for MANO), B its betas (10
+//                                      for MANO, 0 for the default hand); NaN where not present
+//     camTrans, camRot (T*3)            camera frame (observed frames; NaN elsewhere)
+//     jointsWorld (T*21*3)              the model's 21 keypoints of the world motion
+//     jointsCam (T*21*3)                the fitted keypoints in the camera frame (NaN elsewhere)
+//     keypoints2d (T*21*2)              the detected image keypoints (NaN where not detected)
+//     reprojRmsPx (T), handPoseCols P, betaCols B, model: kind },
+//   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles),
+//   timings: { stage: total ms }, warnings: [strings], noHands: bool }
+//
+// Stages (timings keys): perception (networks + crops), fit (hand fit per hand), masks (hand
+// silhouettes at the SLAM resolution), slamPrep (downscale + grey), slam (tracking + mapping),
+// slamFinish (final bundle adjustment), depth (optional), scale, world (camera -> world),
+// infill, joints (forward pass of the world motion).
+
+import { HandTracker } from '../perception/hand_tracker.mjs';
+import { DepthModel } from '../depth_model.mjs';
+
+export const RESULT_VERSION = 1;
+/** The default diagonal field of view when the caller gives none (see README: between a phone's
+ *  main camera, ~75-80 degrees, and a head camera's wide lens, ~100-120). */
+export const DEFAULT_DIAGONAL_FOV_DEG = 90;
+/** Frames above this many pixels are refused (8K is 33 Mpx; the CLI downscales such videos). */
+export const MAX_PIXELS = 4096 * 2304;
+export const NUM_KP = 21;
+
+function abortError() {
+  const e = new Error('the pipeline was aborted');
+  e.name = 'AbortError';
+  return e;
+}
+function checkAbort(signal) {
+  if (signal && signal.aborted) throw abortError();
+}
+const now = () => (typeof performance !== 'undefined' ? performance.now() : Date.now());
+
+/** Pinhole intrinsics for a frame: a given focal, or one from a diagonal field of view. The
+ *  principal point is the image centre (pixel centres at integer coordinates, DESIGN §2). */
+export function defaultIntrinsics(width, height, { focalPx, fovDeg } = {}) {
+  if (!(width > 0 && height > 0)) throw new Error(`intrinsics: bad image size ${width}x${height}`);
+  const halfDiag = 0.5 * Math.hypot(width, height);
+  let f;
+  let focalSource;
+  if (focalPx !== undefined && focalPx !== null) {
+    if (!(Number.isFinite(focalPx) && focalPx > 0)) throw new Error(`focal length must be a positive number of pixels, not ${focalPx}`);
+    f = focalPx;
+    focalSource = 'user-focal';
+  } else {
+    const fov = fovDeg ?? DEFAULT_DIAGONAL_FOV_DEG;
+    if (!(Number.isFinite(fov) && fov > 1 && fov < 179)) throw new Error(`field of view must be in (1, 179) degrees, not ${fovDeg}`);
+    f = halfDiag / Math.tan((fov * Math.PI) / 360);
+    focalSource = fovDeg === undefined || fovDeg === null ? 'default-fov' : 'user-fov';
+  }
+  const fovOut = (360 / Math.PI) * Math.atan(halfDiag / f);
+  return { fx: f, fy: f, cx: (width - 1) / 2, cy: (height - 1) / 2, focalSource, fovDeg: fovOut, refined: false };
+}
+
+/** The SLAM's frame size: the long side at most maxSide, aspect kept, integer pixels. */
+export function slamSize(width, height, maxSide = 640) {
+  const s = Math.min(1, maxSide / Math.max(width, height));
+  return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
+}
+
+/** Box-filtered grey (BT.601 luma) of an RGB(A) image at (dw, dh); each output pixel averages
+ *  the source pixels whose centres fall in its footprint (one pass over the source, row sums
+ *  per output column). out: optional Uint8Array(dw*dh). */
+export function downscaleGrey(src, sw, sh, channels, dw, dh, out = new Uint8Array(dw * dh)) {
+  const ox = new Int32Array(sw);
+  const cw = new Int32Array(dw);
+  for (let x = 0; x < sw; ++x) { ox[x] = Math.min(dw - 1, Math.floor(((x + 0.5) * dw) / sw)); cw[ox[x]] += 1; }
+  const acc = new Float64Array(dw);
+  let y = 0;
+  for (let oy = 0; oy < dh; ++oy) {
+    acc.fill(0);
+    let rows = 0;
+    for (; y < sh && Math.min(dh - 1, Math.floor(((y + 0.5) * dh) / sh)) === oy; ++y, ++rows) {
+      let p = y * sw * channels;
+      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 0.299 * src[p] + 0.587 * src[p + 1] + 0.114 * src[p + 2];
+    }
+    const o = oy * dw;
+    if (rows === 0) { // upscaling: repeat the previous row
+      if (oy > 0) out.copyWithin(o, o - dw, o);
+      continue;
+    }
+    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (rows * cw[x]))) : 0;
+  }
+  return out;
+}
+
+/** Box-filtered RGB copy at (dw, dh) (for the depth network on keyframes). */
+export function downscaleRgb(src, sw, sh, channels, dw, dh) {
+  const out = new Uint8Array(dw * dh * 3);
+  for (let y = 0; y < dh; ++y) {
+    const ya = Math.round((y * sh) / dh);
+    const yb = Math.max(ya + 1, Math.min(sh, Math.round(((y + 1) * sh) / dh)));
+    for (let x = 0; x < dw; ++x) {
+      const xa = Math.round((x * sw) / dw);
+      const xb = Math.max(xa + 1, Math.min(sw, Math.round(((x + 1) * sw) / dw)));
+      let r = 0; let g = 0; let b = 0;
+      for (let yy = ya; yy < yb; ++yy) {
+        for (let xx = xa; xx < xb; ++xx) {
+          const p = (yy * sw + xx) * channels;
+          r += src[p]; g += src[p + 1]; b += src[p + 2];
+        }
+      }
+      const n = (yb - ya) * (xb - xa);
+      const o = 3 * (y * dw + x);
+      out[o] = Math.round(r / n); out[o + 1] = Math.round(g / n); out[o + 2] = Math.round(b / n);
+    }
+  }
+  return out;
+}
+
+/** Rotation matrix (row-major 9) -> quaternion [x, y, z, w] (Shepperd), w >= 0. */
+export function matToQuat(R, o = 0) {
+  const [m00, m01, m02, m10, m11, m12, m20, m21, m22] = [R[o], R[o + 1], R[o + 2], R[o + 3], R[o + 4], R[o + 5], R[o + 6], R[o + 7], R[o + 8]];
+  const tr = m00 + m11 + m22;
+  let x; let y; let z; let w;
+  if (tr > 0) {
+    const s = 2 * Math.sqrt(tr + 1); w = s / 4; x = (m21 - m12) / s; y = (m02 - m20) / s; z = (m10 - m01) / s;
+  } else if (m00 > m11 && m00 > m22) {
+    const s = 2 * Math.sqrt(1 + m00 - m11 - m22); w = (m21 - m12) / s; x = s / 4; y = (m01 + m10) / s; z = (m02 + m20) / s;
+  } else if (m11 > m22) {
+    const s = 2 * Math.sqrt(1 + m11 - m00 - m22); w = (m02 - m20) / s; x = (m01 + m10) / s; y = s / 4; z = (m12 + m21) / s;
+  } else {
+    const s = 2 * Math.sqrt(1 + m22 - m00 - m11); w = (m10 - m01) / s; x = (m02 + m20) / s; y = (m12 + m21) / s; z = s / 4;
+  }
+  const n = Math.hypot(x, y, z, w) * (w < 0 ? -1 : 1);
+  return [x / n, y / n, z / n, w / n];
+}
+
+/** P(right) of a detection from its label and score. */
+function pRight(h) {
+  const s = h.handednessScore ?? 1;
+  return h.handedness === 'right' ? s : 1 - s;
+}
+
+/**
+ * Left/right slots for this frame's detections (at most one per side): the assignment that
+ * maximises the handedness evidence plus continuity with the previous frame's wrists (a hand
+ * within `reach` px of last frame's wrist on a side is most likely that side's hand).
+ * prev: { left: [x, y] | null, right: [x, y] | null }; reach: pixels.
+ */
+export function assignSides(dets, prev, reach) {
+  const cost = (d, side) => {
+    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 1e-3), 1 - 1e-3);
+    let c = -Math.log(p);
+    const w = prev[side];
+    if (w) {
+      const dist = Math.hypot(d.landmarks[0] - w[0], d.landmarks[1] - w[1]);
+      c += dist < reach ? -1.5 * (1 - dist / reach) : 0;
+    }
+    return c;
+  };
+  if (dets.length === 0) return { left: null, right: null };
+  if (dets.length === 1) {
+    const d = dets[0];
+    return cost(d, 'left') < cost(d, 'right') ? { left: d, right: null } : { left: null, right: d };
+  }
+  // best two (the tracker returns at most maxHands)
+  const [a, b] = dets;
+  const ab = cost(a, 'left') + cost(b, 'right');
+  const ba = cost(b, 'left') + cost(a, 'right');
+  return ab <= ba ? { left: a, right: b } : { left: b, right: a };
+}
+
+function nanArray(n) {
+  const a = new Float64Array(n);
+  a.fill(NaN);
+  return a;
+}
+
+/** A growable per-frame store of one hand's camera-frame observations. */
+class HandTrackStore {
+  constructor(P, B) {
+    Object.assign(this, { P, B });
+    this.frames = [];
+  }
+  push(f) { this.frames.push(f); }
+  column(get, width) {
+    const T = this.frames.length;
+    const a = nanArray(T * width);
+    for (let t = 0; t < T; ++t) {
+      const v = this.frames[t] && get(this.frames[t]);
+      if (v) a.set(v.length > width ? v.subarray(0, width) : v, t * width);
+    }
+    return a;
+  }
+}
+
+function modelName(bytes, given, side) {
+  if (given) return given;
+  // the core recognises the format from the content; a name helps MANO/glTF side detection only
+  return `hand_${side}`;
+}
+
+/**
+ * Runs the pipeline. See the header for source, options, hooks and the result.
+ */
+export async function runPipeline(source, options, hooks = {}) {
+  const { core } = options ?? {};
+  const { signal, onProgress, onFrame } = hooks ?? {};
+  if (!core || !core.HandModel || !core.MonoSlam) throw new Error('runPipeline: options.core must be the instantiated hawor_core module');
+  if (!source || typeof source !== 'object') throw new Error('runPipeline: source missing');
+  const { width, height } = source;
+  const fps = source.fps ?? 30;
+  if (!(Number.isInteger(width) && Number.isInteger(height) && width > 0 && height > 0)) {
+    throw new Error(`runPipeline: bad frame size ${width}x${height}`);
+  }
+  const maxPixels = options.maxPixels ?? MAX_PIXELS;
+  if (width * height > maxPixels) {
+    throw new Error(`runPipeline: frames of ${width}x${height} (${(width * height / 1e6).toFixed(1)} Mpx) exceed the limit of ${(maxPixels / 1e6).toFixed(1)} Mpx; downscale the video first (e.g. to 1920 px wide)`);
+  }
+  if (!(Number.isFinite(fps) && fps > 0)) throw new Error(`runPipeline: bad fps ${source.fps}`);
+  if (!source.frames || typeof source.frames[Symbol.asyncIterator] !== 'function' && typeof source.frames[Symbol.iterator] !== 'function') {
+    throw new Error('runPipeline: source.frames must be an (async) iterable of { index, rgba }');
+  }
+  if (!options.handModels || !options.handModels.left || !options.handModels.right) {
+    throw new Error('runPipeline: options.handModels.left and .right (hand model file bytes) are required');
+  }
+  checkAbort(signal);
+
+  const warnings = [];
+  const timings = {};
+  const addTime = (k, ms) => { timings[k] = (timings[k] ?? 0) + ms; };
+  const intr = defaultIntrinsics(width, height, { focalPx: options.focalPx, fovDeg: options.fovDeg });
+  const K = [intr.fx, intr.fy, intr.cx, intr.cy];
+  const ss = slamSize(width, height, options.slamMaxSide ?? 640);
+  const sx = ss.width / width;
+  const sy = ss.height / height;
+  // The SLAM image's pixel (u', v') covers source pixels u = (u' + 0.5) / s - 0.5.
+  const Ks = [intr.fx * sx, intr.fy * sy, (intr.cx + 0.5) * sx - 0.5, (intr.cy + 0.5) * sy - 0.5];
+  const dilate = options.maskDilatePx ?? 2;
+  const infillMethod = options.infill ?? 'spline';
+
+  const owned = []; // embind objects to delete
+  let tracker = null;
+  let depthModel = null;
+  try {
+    // --- models ---
+    const t0 = now();
+    const models = {};
+    for (const side of ['left', 'right']) {
+      const bytes = options.handModels[side];
+      if (!(bytes instanceof Uint8Array)) throw new Error(`runPipeline: handModels.${side} must be a Uint8Array`);
+      try {
+        models[side] = new core.HandModel(bytes, side, modelName(bytes, options.handModels[`${side}Name`], side));
+      } catch (e) {
+        throw new Error(`the ${side} hand model: ${e.message}`);
+      }
+      owned.push(models[side]);
+      if (models[side].numKeypoints() !== NUM_KP) throw new Error(`the ${side} hand model gives ${models[side].numKeypoints()} keypoints, not 21`);
+    }
+    const fitters = { left: new core.HandFitter(models.left), right: new core.HandFitter(models.right) };
+    owned.push(fitters.left, fitters.right);
+    const P = { left: 3 * (models.left.numJoints() - 1), right: 3 * (models.right.numJoints() - 1) };
+    const B = { left: models.left.numBetas(), right: models.right.numBetas() };
+    if (!options.observations) {
+      const ort = options.ort;
+      if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
+      const m = options.models ?? {};
+      if (m.palmSession && m.landmarkSession) {
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2 });
+      } else {
+        if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
+          throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
+        }
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2 });
+      }
+    }
+    if (options.depthModel) {
+      if (!options.ort) throw new Error('runPipeline: a depth model needs options.ort');
+      depthModel = await DepthModel.create(options.ort, options.depthModel.bytes, options.depthModel.config);
+    }
+    addTime('load', now() - t0);
+
+    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true });
+    owned.push(slam);
+    const grey = new Uint8Array(ss.width * ss.height);
+    const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
+    const keptRgb = depthModel ? [] : null;
+    const prevWrist = { left: null, right: null };
+    const reach = 0.15 * Math.hypot(width, height);
+    let T = 0;
+    let channels = 0;
+    let fitFailures = 0;
+
+    for await (const frame of source.frames) {
+      checkAbort(signal);
+      const tf = now();
+      const rgba = frame && frame.rgba;
+      if (!(rgba instanceof Uint8Array || rgba instanceof Uint8ClampedArray)) throw new Error(`frame ${T}: rgba must be a Uint8Array`);
+      const c = rgba.length / (width * height);
+      if (c !== 3 && c !== 4) throw new Error(`frame ${T}: ${rgba.length} bytes, expected ${width}x${height}x4 (RGBA) or x3 (RGB)`);
+      channels = c;
+      // --- perception ---
+      let t1 = now();
+      let dets;
+      if (options.observations) {
+        dets = (await options.observations(T)) ?? [];
+      } else {
+        dets = await tracker.track({ width, height, data: rgba, channels: c });
+      }
+      addTime('perception', now() - t1);
+      const sides = assignSides(dets, prevWrist, reach);
+      // --- fit ---
+      t1 = now();
+      const maskHands = [];
+      const info = { index: frame.index ?? T, hands: [] };
+      for (const side of ['left', 'right']) {
+        const d = sides[side];
+        if (!d) {
+          fitters[side].reset();
+          prevWrist[side] = null;
+          stores[side].push(null);
+          continue;
+        }
+        const stride = d.landmarks.length === 63 ? 3 : 2;
+        const kp2 = new Float64Array(2 * NUM_KP);
+        for (let k = 0; k < NUM_KP; ++k) { kp2[2 * k] = d.landmarks[stride * k]; kp2[2 * k + 1] = d.landmarks[stride * k + 1]; }
+        const kp3 = d.world ? Float64Array.from(d.world) : null;
+        prevWrist[side] = [kp2[0], kp2[1]];
+        let fit = null;
+        try {
+          fit = fitters[side].fit(kp2, null, kp3, null, K, width, height);
+        } catch (e) {
+          fitFailures += 1;
+          fitters[side].reset();
+        }
+        // a fit behind the camera or absurdly far is not a hand
+        const ok = fit && fit.trans[2] > 0.03 && fit.trans[2] < 5 && Number.isFinite(fit.reprojRmsPx);
+        if (!ok) {
+          stores[side].push({ kp2 });
+          info.hands.push({ side, valid: false, keypoints2d: kp2 });
+          continue;
+        }
+        stores[side].push({ kp2, fit });
+        maskHands.push({ model: models[side], rot: fit.rot, handPose: fit.handPose, betas: fit.betas, trans: fit.trans, value: 255 });
+        info.hands.push({ side, valid: true, keypoints2d: kp2 });
+      }
+      addTime('fit', now() - t1);
+      // --- masks at the SLAM resolution ---
+      t1 = now();
+      const mask = maskHands.length ? core.renderHandMasks(ss.width, ss.height, Ks, maskHands, dilate) : null;
+      addTime('masks', now() - t1);
+      // --- SLAM ---
+      t1 = now();
+      // at the frame's own size the core converts to grey itself
+      const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
+      if (keptRgb) keptRgb.push(downscaleRgb(rgba, width, height, c, ss.width, ss.height));
+      addTime('slamPrep', now() - t1);
+      t1 = now();
+      info.slamStatus = slam.process(slamFrame, mask);
+      addTime('slam', now() - t1);
+      T += 1;
+      info.ms = now() - tf;
+      if (onFrame) onFrame(info);
+      if (onProgress) onProgress({ stage: 'frames', done: T, total: source.frameCount ?? null });
+    }
+    if (T === 0) throw new Error('the video has no frames');
+    if (fitFailures) warnings.push(`the hand fit failed on ${fitFailures} detections (those frames count as unobserved)`);
+    checkAbort(signal);
+
+    // --- SLAM finish ---
+    let t1 = now();
+    if (onProgress) onProgress({ stage: 'slam-finish', done: 0, total: 1 });
+    const traj = slam.finish();
+    addTime('slamFinish', now() - t1);
+    if (!traj.initialised) {
+      warnings.push(T < 2 ? 'a single frame: no camera motion can be estimated (identity pose)'
+        : 'the SLAM did not initialise (too little camera translation or texture): the camera is held at the first pose');
+    }
+    const nLost = Array.from(traj.status).filter((s) => s === 2).length;
+    if (nLost > 0) warnings.push(`the camera was lost on ${nLost} of ${T} frames (their poses are interpolated or held)`);
+    checkAbort(signal);
+
+    // --- hands: camera-frame motion per side ---
+    const hands = {};
+    const present = {};
+    for (const side of ['left', 'right']) {
+      const st = stores[side];
+      const valid = new Uint8Array(T);
+      for (let t = 0; t < T; ++t) valid[t] = st.frames[t] && st.frames[t].fit ? 1 : 0;
+      present[side] = valid.some((v) => v);
+      hands[side] = {
+        valid,
+        camRot: st.column((f) => f.fit && f.fit.rot, 3),
+        camTrans: st.column((f) => f.fit && f.fit.trans, 3),
+        handPose: st.column((f) => f.fit && f.fit.handPose, P[side]),
+        betas: st.column((f) => f.fit && f.fit.betas, B[side]),
+        jointsCam: st.column((f) => f.fit && f.fit.keypoints, 3 * NUM_KP),
+        keypoints2d: st.column((f) => f.kp2, 2 * NUM_KP),
+        reprojRmsPx: st.column((f) => f.fit && Float64Array.of(f.fit.reprojRmsPx), 1),
+      };
+    }
+    const noHands = !present.left && !present.right;
+    if (noHands) warnings.push('no hands were found in the video');
+
+    // --- depth on keyframes (optional) ---
+    let depthMaps = null;
+    if (depthModel) {
+      t1 = now();
+      const frames = Array.from(traj.keyframeDepths.frames);
+      depthMaps = [];
+      for (let k = 0; k < frames.length; ++k) {
+        checkAbort(signal);
+        depthMaps.push(await depthModel.predict(keptRgb[frames[k]], ss.width, ss.height, 3));
+        if (onProgress) onProgress({ stage: 'depth', done: k + 1, total: frames.length });
+      }
+      keptRgb.length = 0;
+      addTime('depth', now() - t1);
+    }
+
+    // --- metric scale ---
+    t1 = now();
+    if (onProgress) onProgress({ stage: 'scale', done: 0, total: 1 });
+    const wristTracks = [];
+    for (const side of ['left', 'right']) {
+      if (!present[side]) continue;
+      const positions = new Float64Array(3 * T);
+      const jc = hands[side].jointsCam;
+      for (let t = 0; t < T; ++t) positions.set(hands[side].valid[t] ? jc.subarray(63 * t, 63 * t + 3) : [0, 0, 1], 3 * t);
+      wristTracks.push({ positions, valid: hands[side].valid });
+    }
+    let scale = { scale: NaN, method: 'none', confidence: 0 };
+    if (traj.initialised && (wristTracks.length || depthMaps)) {
+      try {
+        const masksKf = depthMaps ? null : undefined;
+        scale = core.metricScale({
+          rotations: traj.rotations, translations: traj.translations, fps,
+          ...(depthMaps ? { keyframeDepths: traj.keyframeDepths, depthMaps, depthWidth: ss.width, depthHeight: ss.height, masks: masksKf } : {}),
+          ...(wristTracks.length ? { hands: wristTracks } : {}),
+        });
+      } catch (e) {
+        warnings.push(`metric scale: ${e.message}`);
+      }
+    }
+    let s = scale.scale;
+    if (!(Number.isFinite(s) && s > 0)) {
+      // No metric cue: keep the SLAM's own units, flagged (the trajectory's shape is still right).
+      s = 1;
+      if (traj.initialised) warnings.push('no metric scale could be estimated (no depth model and no usable hand cue): the camera trajectory is in the SLAM\'s arbitrary units');
+      scale = { ...scale, scale: 1, method: 'none', confidence: 0 };
+    } else if (scale.confidence < 0.4) {
+      warnings.push(`the metric scale is uncertain (method ${scale.method}, confidence ${scale.confidence.toFixed(2)})`);
+    }
+    addTime('scale', now() - t1);
+    checkAbort(signal);
+
+    // --- camera in metres ---
+    const positions = new Float64Array(3 * T);
+    const quaternions = new Float64Array(4 * T);
+    const timestamps = new Float64Array(T);
+    for (let t = 0; t < T; ++t) {
+      for (let a = 0; a < 3; ++a) positions[3 * t + a] = s * traj.translations[3 * t + a];
+      quaternions.set(matToQuat(traj.rotations, 9 * t), 4 * t);
+      timestamps[t] = t / fps;
+    }
+    // SLAM points: keyframe depths back-projected into the world
+    const kd = traj.keyframeDepths;
+    const points = new Float64Array(3 * kd.depth.length);
+    for (let q = 0; q < kd.depth.length; ++q) {
+      const f = kd.frames[kd.kf[q]];
+      const z = kd.depth[q];
+      const xc = ((kd.uv[2 * q] - Ks[2]) / Ks[0]) * z;
+      const yc = ((kd.uv[2 * q + 1] - Ks[3]) / Ks[1]) * z;
+      const R = traj.rotations.subarray(9 * f, 9 * f + 9);
+      for (let a = 0; a < 3; ++a) points[3 * q + a] = s * (R[3 * a] * xc + R[3 * a + 1] * yc + R[3 * a + 2] * z + traj.translations[3 * f + a]);
+    }
+
+    // --- world motion, infilling, joints ---
+    const outHands = {};
+    for (const side of ['left', 'right']) {
+      const h = hands[side];
+      const base = {
+        valid: h.valid, present: present[side], camRot: h.camRot, camTrans: h.camTrans, jointsCam: h.jointsCam,
+        keypoints2d: h.keypoints2d, reprojRmsPx: h.reprojRmsPx, handPoseCols: P[side], betaCols: B[side],
+        model: models[side].kind(),
+      };
+      if (!present[side]) {
+        outHands[side] = { ...base, infilled: new Uint8Array(T), trans: nanArray(3 * T), rot: nanArray(3 * T),
+          handPose: nanArray(P[side] * T), betas: nanArray(B[side] * T), jointsWorld: nanArray(63 * T) };
+        continue;
+      }
+      t1 = now();
+      const camMotion = { rot: h.camRot, trans: h.camTrans, handPose: h.handPose, betas: h.betas, valid: h.valid };
+      // cameraToWorld wants finite numbers everywhere: unobserved frames get zeros (they are
+      // overwritten by the infiller)
+      const finite = (a) => a.map((v) => (Number.isFinite(v) ? v : 0));
+      const world = core.cameraToWorld({ rot: finite(camMotion.rot), trans: finite(camMotion.trans), handPose: finite(camMotion.handPose),
+        betas: finite(camMotion.betas), valid: camMotion.valid }, T, traj.rotations, traj.translations, s, models[side]);
+      addTime('world', now() - t1);
+      t1 = now();
+      for (const k of ['rot', 'trans', 'handPose', 'betas']) {
+        const cols = world[k].length / T;
+        for (let t = 0; t < T; ++t) if (!h.valid[t]) world[k].fill(NaN, t * cols, (t + 1) * cols);
+      }
+      const filled = core.infillHand(world, T, infillMethod, models[side]);
+      addTime('infill', now() - t1);
+      t1 = now();
+      const jointsWorld = new Float64Array(63 * T);
+      for (let t = 0; t < T; ++t) {
+        const pose = {
+          rot: filled.rot.subarray(3 * t, 3 * t + 3), trans: filled.trans.subarray(3 * t, 3 * t + 3),
+          handPose: filled.handPose.subarray(P[side] * t, P[side] * (t + 1)), betas: filled.betas.subarray(B[side] * t, B[side] * (t + 1)),
+        };
+        jointsWorld.set(models[side].forward(pose).keypoints, 63 * t);
+      }
+      addTime('joints', now() - t1);
+      outHands[side] = { ...base, infilled: filled.filled, trans: filled.trans, rot: filled.rot, handPose: filled.handPose,
+        betas: filled.betas, jointsWorld };
+    }
+    if (onProgress) onProgress({ stage: 'done', done: 1, total: 1 });
+
+    return {
+      version: RESULT_VERSION,
+      width, height, fps, frameCount: T, modelKind: options.observations ? 'observations' : (options.modelKind ?? 'lite'),
+      threads: options.threads ?? 1,
+      intrinsics: { fx: intr.fx, fy: intr.fy, cx: intr.cx, cy: intr.cy, focalSource: intr.focalSource, fovDeg: intr.fovDeg, refined: false },
+      slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
+        numResets: traj.numResets, initialised: traj.initialised },
+      camera: { positions, quaternions, status: traj.status, timestamps },
+      points,
+      scale,
+      hands: outHands,
+      faces: { left: models.left.faces(), right: models.right.faces() },
+      timings,
+      warnings,
+      noHands,
+      stats: tracker ? { ...tracker.stats } : {},
+    };
+  } finally {
+    for (const o of owned.reverse()) { try { o.delete(); } catch { /* already freed */ } }
+  }
+}
