@@ -342,9 +342,9 @@ async function addManoFile(file, side) {
 
 async function addDepthFile(file) {
   if (/\.json$/i.test(file.name)) {
-    let cfg;
-    try { cfg = parseDepthConfig(await file.text()); } catch (e) { throw new InputError('depth', `"${file.name}": ${e.message}`); }
-    app.depth.config = cfg; app.depth.configName = file.name;
+    const text = await file.text();
+    try { parseDepthConfig(text); } catch (e) { throw new InputError('depth', `"${file.name}": ${e.message}`); }
+    app.depth.config = text; app.depth.configName = file.name;
   } else {
     app.depth.onnx = { name: file.name, bytes: await readFile(file) };
   }

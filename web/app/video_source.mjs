@@ -85,7 +85,7 @@ const COMMON_FPS = [23.976, 24, 25, 29.97, 30, 48, 50, 59.94, 60, 90, 100, 119.8
 /// Frame rate from the presentation times of the first frames (the smallest step between
 /// consecutive presented frames; snapped to a common rate within 1 %) and the presentation
 /// time of the first frame. Leaves the video at 0.
-export async function estimateFps(video, frames = 8) {
+export async function estimateFps(video, frames = 12) {
   await seek(video, 0);
   const times = [];
   for (let i = 0; i < frames; i++) {
@@ -94,12 +94,21 @@ export async function estimateFps(video, frames = 8) {
     times.push(f.mediaTime);
   }
   await seek(video, 0);
-  let step = Infinity;
-  for (let i = 1; i < times.length; i++) { const d = times[i] - times[i - 1]; if (d > 1e-4 && d < step) step = d; }
-  if (!Number.isFinite(step)) return { fps: null, base: times.length ? times[0] : 0, presented: times.length };
+  const deltas = [];
+  for (let i = 1; i < times.length; i++) { const d = times[i] - times[i - 1]; if (d > 1e-4) deltas.push(d); }
+  if (!deltas.length) return { fps: null, base: 0, presented: times.length };
+  // The frame step: the mean of the steps within 1.5x the smallest (skipped frames left out;
+  // container timestamps are often rounded to milliseconds).
+  const dmin = Math.min(...deltas);
+  const near = deltas.filter((d) => d < 1.5 * dmin);
+  const step = near.reduce((a, b) => a + b, 0) / near.length;
   let fps = Math.round(1000 / step) / 1000;
-  for (const c of COMMON_FPS) if (Math.abs(fps / c - 1) < 0.01) { fps = c; break; }
-  return { fps, base: times[0], presented: times.length };
+  let best = null;
+  for (const c of COMMON_FPS) if (Math.abs(fps / c - 1) < 0.015 && (best === null || Math.abs(fps - c) < Math.abs(fps - best))) best = c;
+  if (best !== null) fps = best;
+  // Frames lie on the grid base + k / fps; playing from a paused frame 0 presents frame 1 first.
+  const base = times[0] - Math.round(times[0] * fps) / fps;
+  return { fps, base, presented: times.length };
 }
 
 /// The processing size: the video scaled so that its long side is at most maxSide.
@@ -126,7 +135,16 @@ export function videoFrames(video, { fps, base = 0, width, height, maxFrames = I
         if (wait) await wait();
         if (signal && signal.aborted) return;
         const f = await nextPresented(video, draw);
-        if (!f) return;                                     // ended
+        if (!f) {
+          // Ended: the player may end before presenting the last frame(s); they are fetched by
+          // seeking while they lie inside the duration.
+          for (; expected < maxFrames && base + (expected + 0.25) / fps < video.duration; expected++) {
+            await seek(video, base + (expected + 0.25) / fps);
+            yield { index: expected, rgba: draw() };
+            if (wait) await wait();
+          }
+          return;
+        }
         const idx = Math.round((f.mediaTime - base) * fps);
         if (idx < expected) continue;                      // the same frame again
         // Frames the player skipped: fetched one by one by seeking, in order.

@@ -143,7 +143,7 @@ async function start(meta, options) {
     const opts = {
       core: state.core, ort,
       models: { palm: nets.palm, landmark: nets.landmark },
-      handModels: { left: hands.left.bytes, right: hands.right.bytes },
+      handModels: { left: hands.left.bytes, right: hands.right.bytes, leftName: hands.left.name, rightName: hands.right.name },
       modelKind: options.modelKind || 'lite',
       threads,
     };
