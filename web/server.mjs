@@ -7,6 +7,7 @@
 //   /                 web/app/index.html
 //   /app/...          web/app/            the page, its modules and the Web Worker
 //   /src/...          web/src/            the shared JavaScript (perception, pipeline, exports)
+//   /tools/...        web/tools/          shared helpers the exports import (npz.mjs)
 //   /models/...       web/models/         the ONNX hand networks converted at install
 //   /core/...         build/wasm/wasm/    hawor_core.mjs + hawor_core.wasm
 //   /assets/...       build/web/          the default hand models and the synthetic sample
@@ -47,6 +48,7 @@ export function routes(root) {
   return [
     ['/app/', path.join(root, 'web/app')],
     ['/src/', path.join(root, 'web/src')],
+    ['/tools/', path.join(root, 'web/tools')],
     ['/models/', path.join(root, 'web/models')],
     ['/core/', path.join(root, 'build/wasm/wasm')],
     ['/assets/', path.join(root, 'build/web')],

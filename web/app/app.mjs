@@ -44,6 +44,8 @@ function setStage(stage, done, total) {
   let st = run.stages.get(stage);
   const now = performance.now();
   if (!st) {
+    // A new stage: the ones before it are over.
+    for (const prev of run.stages.values()) prev.li.className = 'done';
     st = { first: now, last: now, li: document.createElement('li') };
     run.stages.set(stage, st);
     ui.stages.appendChild(st.li);
@@ -79,7 +81,7 @@ function onWorker(m, resolveReady) {
     case 'progress': setStage(m.stage, m.done, m.total); break;
     case 'frame-info': break;
     case 'result': onResult(m.result, m.meshes); break;
-    case 'cancelled': finishRun(); showMessage('Cancelled. Pick the next clip whenever you like.', 'info'); break;
+    case 'cancelled': if (run && run.cancelled) { finishRun(); showMessage('Cancelled. Pick the next clip whenever you like.', 'info'); } break;
     case 'error':
       if (run) finishRun();
       showMessage(errorText(m.kind, m.message));
@@ -148,6 +150,7 @@ async function processVideo(url, name, sampleMeta = null) {
     ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}`
       + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default');
     app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount }, options });
+    run.started = true;
     const wait = () => new Promise((resolve) => {
       if (run.finished || run.credits > 0) return resolve();
       run.wake = resolve;
@@ -173,7 +176,7 @@ async function processVideo(url, name, sampleMeta = null) {
   } catch (e) {
     const kind = e instanceof InputError ? e.kind : 'video';
     if (app.run === run) {
-      app.worker.postMessage({ type: 'cancel' });
+      if (run.started) app.worker.postMessage({ type: 'cancel' });
       finishRun();
       showMessage(errorText(kind, e.message));
     }
@@ -184,8 +187,10 @@ function cancelRun() {
   const run = app.run;
   if (!run) return;
   run.finished = true;
+  run.cancelled = true;
   if (run.wake) run.wake();
   setStage('cancelling');
+  if (!run.started) { finishRun(); showMessage('Cancelled.', 'info'); return; }
   app.worker.postMessage({ type: 'cancel' });
   // A worker stuck inside a long call is replaced.
   run.killTimer = setTimeout(() => {

@@ -222,7 +222,7 @@ self.onmessage = async (ev) => {
       case 'start': start(m.meta, m.options); break;
       case 'frame': if (state.run) state.run.frames.push({ index: m.index, rgba: new Uint8ClampedArray(m.rgba) }); break;
       case 'end': if (state.run) state.run.frames.end(); break;
-      case 'cancel': if (state.run) state.run.controller.abort(); else post({ type: 'cancelled' }); break;
+      case 'cancel': if (state.run) state.run.controller.abort(); break;
       case 'load-result': await loadResult(m.text, m.options || {}); break;
       case 'export': { const x = await exportResult(m.format); post({ type: 'exported', format: m.format, ...x }, x.data.buffer ? [x.data.buffer] : []); break; }
       default: fail('internal', `worker: unknown message ${m.type}`);

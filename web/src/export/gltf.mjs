@@ -112,12 +112,9 @@ export function buildGlb({ fps, frameCount, hands = {}, camera = null, points = 
   const dt = 1 / fps;
 
   // Shared scale keys of the flip-book: [0 -> 1 -> 0], [1 -> 0] (first frame), [0 -> 1] (last).
-  const scales = {
-    mid: b.accessor(new Float32Array([0, 0, 0, 1, 1, 1, 0, 0, 0]), 'VEC3', FLOAT),
-    first: b.accessor(new Float32Array([1, 1, 1, 0, 0, 0]), 'VEC3', FLOAT),
-    last: b.accessor(new Float32Array([0, 0, 0, 1, 1, 1]), 'VEC3', FLOAT),
-    only: b.accessor(new Float32Array([1, 1, 1]), 'VEC3', FLOAT),
-  };
+  const keys = { mid: [0, 0, 0, 1, 1, 1, 0, 0, 0], first: [1, 1, 1, 0, 0, 0], last: [0, 0, 0, 1, 1, 1], only: [1, 1, 1] };
+  const made = {};
+  const scales = (k) => (made[k] ??= b.accessor(new Float32Array(keys[k]), 'VEC3', FLOAT));
 
   for (const side of ['left', 'right']) {
     const h = hands[side];
@@ -137,10 +134,10 @@ export function buildGlb({ fps, frameCount, hands = {}, camera = null, points = 
         scale: t === 0 ? [1, 1, 1] : [0, 0, 0] });
       children.push(node);
       let times, values;
-      if (T === 1) { times = [0]; values = scales.only; }
-      else if (t === 0) { times = [0, dt]; values = scales.first; }
-      else if (t === T - 1) { times = [0, t * dt]; values = scales.last; }
-      else { times = [0, t * dt, (t + 1) * dt]; values = scales.mid; }
+      if (T === 1) { times = [0]; values = scales('only'); }
+      else if (t === 0) { times = [0, dt]; values = scales('first'); }
+      else if (t === T - 1) { times = [0, t * dt]; values = scales('last'); }
+      else { times = [0, t * dt, (t + 1) * dt]; values = scales('mid'); }
       const input = b.accessor(new Float32Array(times), 'SCALAR', FLOAT, { minmax: true });
       anim.samplers.push({ input, output: values, interpolation: 'STEP' });
       anim.channels.push({ sampler: anim.samplers.length - 1, target: { node, path: 'scale' } });
