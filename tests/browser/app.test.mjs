@@ -118,6 +118,11 @@ test('bad inputs give clear messages and the app stays usable', { skip }, async 
   ffmpeg(['-f', 'lavfi', '-i', 'testsrc=size=320x240:rate=30', '-frames:v', '4', '-c:v', 'libvpx-vp9', '-deadline', 'realtime', join(dir, 'short.webm')]);
   await page.setInputFiles('#file-video', join(dir, 'short.webm'));
   await expectError('Clip too short');
+  // A clip without hands (flat grey): processed, then said so.
+  ffmpeg(['-f', 'lavfi', '-i', 'color=c=gray:size=320x240:rate=30', '-frames:v', '12', '-c:v', 'libvpx-vp9', '-deadline', 'realtime', join(dir, 'grey.webm')]);
+  await page.setInputFiles('#file-video', join(dir, 'grey.webm'));
+  assert.match(await expectError('No hands found', 60000), /no hand was detected/);
+  assert.equal((await page.evaluate(() => window.haworApp.result.frameCount)), 12);
   // A wrong MANO file: refused before any frame is processed.
   writeFileSync(join(dir, 'MANO_RIGHT.pkl'), Buffer.from('this is not a pickle'));
   await page.setInputFiles('#file-mano-right', join(dir, 'MANO_RIGHT.pkl'));
@@ -219,6 +224,30 @@ async function checkGlb(file, T, fps) {
   const frames = gltf.scene.getObjectByName('right_hand').children.length + gltf.scene.getObjectByName('left_hand').children.length;
   assert.ok(frames > 0, 'no hand frames in the GLB');
 }
+
+test('MANO files dropped on the page drive the meshes (stand-in MANO files, 30 frames of the sample)', { skip }, async () => {
+  const dir = join(out, 'mano');
+  mkdirSync(dir, { recursive: true });
+  const py = spawnSync(PY, [join(root, 'tests/ref/hand_make_mano.py'), join(dir, 'ref.txt'), dir], { encoding: 'utf8' });
+  assert.equal(py.status, 0, py.stderr);
+  // Dropped together on the drop zone: the sides come from the names.
+  const files = ['MANO_LEFT.pkl', 'MANO_RIGHT.pkl'].map((n) => ({ name: n, mimeType: 'application/octet-stream', buffer: readFileSync(join(dir, n)) }));
+  const handle = await page.evaluateHandle(() => new DataTransfer());
+  for (const f of files) {
+    await page.evaluate(({ dt, name, b64 }) => dt.items.add(new File([Uint8Array.from(atob(b64), (c) => c.charCodeAt(0))], name)),
+      { dt: handle, name: f.name, b64: f.buffer.toString('base64') });
+  }
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer: handle });
+  await page.waitForFunction(() => /MANO left: MANO_LEFT\.pkl, right: MANO_RIGHT\.pkl/.test(document.getElementById('models-note').textContent), null, { timeout: 20000 });
+  await page.fill('#opt-maxframes', '30');
+  await page.click('#btn-sample');
+  await waitDone(120000);
+  assert.equal(await message(), null, JSON.stringify(await page.evaluate(() => window.haworApp.result && window.haworApp.result.warnings)));
+  const s = await page.evaluate(() => window.haworApp.sceneSummary());
+  for (const side of ['left', 'right']) assert.equal(s.hands[side].vertices, 778, `${side}: ${JSON.stringify(s.hands[side])}`);
+  await page.click('#btn-clear-models');
+  await page.fill('#opt-maxframes', '');
+});
 
 test('the real clip through the file input', { skip: skip || (!existsSync(KITCHEN) && 'the clip is absent') }, async () => {
   if (!existsSync(KITCHEN)) console.log(`# SKIP: ${KITCHEN} not found`);
