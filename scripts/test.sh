@@ -41,7 +41,8 @@ run_suite() {
 }
 
 # run_node_suite: the JavaScript tests (tests/web, node's own runner, onnxruntime-web's wasm
-# build) against the native binary just built; tallies node's "# pass N" / "# fail N". The
+# build) against the native binary and the WebAssembly core (hawor_core.mjs) just built;
+# tallies node's "# pass N" / "# fail N". The
 # files are listed by the shell (node 18 and 20 also take the folder, node 22 only patterns);
 # no flag is needed on node 18 or 20 (onnxruntime-web reads its .wasm from disk in node).
 run_node_suite() {
@@ -50,7 +51,7 @@ run_node_suite() {
     echo "[node] node_modules/onnxruntime-web missing: run scripts/install.sh" >&2
     total_fail=$((total_fail + 1)); status=1; return
   fi
-  HAWOR_BIN="$root/build/native/examples/hawor" node --test --test-reporter=tap tests/web/*.test.mjs \
+  HAWOR_BIN="$root/build/native/examples/hawor" HAWOR_CORE="$root/build/wasm/wasm/hawor_core.mjs" node --test --test-reporter=tap tests/web/*.test.mjs \
     2>&1 | tee "$log_dir/node-test.log"
   local rc=${PIPESTATUS[0]} pass fail
   pass=$(grep -E '^# pass [0-9]+$' "$log_dir/node-test.log" | tail -1 | awk '{print $3}')
@@ -91,13 +92,14 @@ run_browser_suite() {
 }
 
 run_suite native cmake -DCMAKE_BUILD_TYPE=Release
-run_node_suite
 if command -v clang++ >/dev/null; then
   run_suite sanitize env CC=clang CXX=clang++ cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_FUZZ=ON -DHAWOR_BUILD_EXAMPLES=OFF
 else
   run_suite sanitize cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_BUILD_EXAMPLES=OFF
 fi
 run_suite wasm emcmake cmake -DCMAKE_BUILD_TYPE=Release
+# after the WebAssembly build: the pipeline tests (tests/web/pipeline.test.mjs) run its hawor_core.mjs
+run_node_suite
 run_browser_suite
 
 echo "$total_pass passed, $total_fail failed"

@@ -19,7 +19,10 @@ export class HandTracker {
    * @param palmModel    palm_detection_{full,lite}.onnx (path, URL or Uint8Array)
    * @param landmarkModel hand_landmark_{full,lite}.onnx
    * @param options      { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false,
-   *                       sessionOptions (default graphOptimizationLevel 'all') }
+   *                       detectGap = 0, sessionOptions (default graphOptimizationLevel 'all') }
+   *                      detectGap: while at least one hand is tracked, the detector (looking for
+   *                      the others) runs only after this many frames without it (0: every frame,
+   *                      MediaPipe's behaviour); with no hand tracked it runs on every frame
    */
   static async create(ort, palmModel, landmarkModel, options = {}) {
     const so = { graphOptimizationLevel: 'all', ...(options.sessionOptions ?? {}) };
@@ -28,8 +31,9 @@ export class HandTracker {
     return new HandTracker(ort, palm, landmark, options);
   }
 
-  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false } = {}) {
-    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored });
+  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0 } = {}) {
+    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap });
+    this.framesWithoutDetect = 0;
     for (const [s, what, n] of [[palmSession, 'palm', 2], [landmarkSession, 'landmark', 4]]) {
       if (s.inputNames.length !== 1 || s.outputNames.length !== n) {
         throw new Error(`HandTracker: the ${what} model has ${s.inputNames.length} inputs / ${s.outputNames.length} outputs, expected 1 / ${n}`);
@@ -86,7 +90,9 @@ export class HandTracker {
       if (dup < 0) hands.push({ ...h, source: 'track' });
       else if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
     }
-    if (hands.length < this.maxHands) {
+    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap);
+    this.framesWithoutDetect = detect ? 0 : this.framesWithoutDetect + 1;
+    if (detect) {
       for (const palm of await this.detectPalms(image)) {
         if (hands.length >= this.maxHands) break;
         const roi = roiFromPalm(palm);

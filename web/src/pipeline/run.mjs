@@ -33,7 +33,9 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
-//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2) }
+//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2),
+//           detectGap? (2)               while one hand is tracked, the palm detector looks for
+//                                        the other only every detectGap+1 frames }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
@@ -117,28 +119,29 @@ export function slamSize(width, height, maxSide = 640) {
   return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
 }
 
-/** Box-filtered grey (BT.601 luma) of an RGB(A) image at (dw, dh); each output pixel averages
+/** Box-filtered grey (BT.601 luma, integer weights) of an RGB(A) image at (dw, dh); each output pixel averages
  *  the source pixels whose centres fall in its footprint (one pass over the source, row sums
  *  per output column). out: optional Uint8Array(dw*dh). */
 export function downscaleGrey(src, sw, sh, channels, dw, dh, out = new Uint8Array(dw * dh)) {
   const ox = new Int32Array(sw);
   const cw = new Int32Array(dw);
   for (let x = 0; x < sw; ++x) { ox[x] = Math.min(dw - 1, Math.floor(((x + 0.5) * dw) / sw)); cw[ox[x]] += 1; }
-  const acc = new Float64Array(dw);
+  // integer luma weights (BT.601 x 256): 77 R + 150 G + 29 B
+  const acc = new Int32Array(dw);
   let y = 0;
   for (let oy = 0; oy < dh; ++oy) {
     acc.fill(0);
     let rows = 0;
     for (; y < sh && Math.min(dh - 1, Math.floor(((y + 0.5) * dh) / sh)) === oy; ++y, ++rows) {
       let p = y * sw * channels;
-      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 0.299 * src[p] + 0.587 * src[p + 1] + 0.114 * src[p + 2];
+      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 77 * src[p] + 150 * src[p + 1] + 29 * src[p + 2];
     }
     const o = oy * dw;
     if (rows === 0) { // upscaling: repeat the previous row
       if (oy > 0) out.copyWithin(o, o - dw, o);
       continue;
     }
-    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (rows * cw[x]))) : 0;
+    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (256 * rows * cw[x]))) : 0;
   }
   return out;
 }
@@ -192,19 +195,26 @@ function pRight(h) {
 }
 
 /**
- * Left/right slots for this frame's detections (at most one per side): the assignment that
- * maximises the handedness evidence plus continuity with the previous frame's wrists (a hand
- * within `reach` px of last frame's wrist on a side is most likely that side's hand).
+ * Left/right slots for this frame's detections (at most one per side): the assignment of least
+ * cost, where a detection's cost on a side is
+ *   -log P(side) from the landmark network's handedness, clamped to [0.05, 0.95] (one frame's
+ *     label, which flips now and then with full confidence, can be outvoted), minus
+ *   CONTINUITY * (1 - d / reach) when it lies within `reach` px of that side's wrist in the
+ *     previous frame (tracks keep their side),
+ * plus, for two hands, CROSSED when the left slot's wrist lies right of the right slot's (hands
+ * rarely cross in an egocentric view).
  * prev: { left: [x, y] | null, right: [x, y] | null }; reach: pixels.
  */
 export function assignSides(dets, prev, reach) {
+  const CONTINUITY = 3.5;
+  const CROSSED = 2;
   const cost = (d, side) => {
-    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 1e-3), 1 - 1e-3);
+    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 0.05), 0.95);
     let c = -Math.log(p);
     const w = prev[side];
     if (w) {
       const dist = Math.hypot(d.landmarks[0] - w[0], d.landmarks[1] - w[1]);
-      c += dist < reach ? -1.5 * (1 - dist / reach) : 0;
+      if (dist < reach) c -= CONTINUITY * (1 - dist / reach);
     }
     return c;
   };
@@ -213,10 +223,11 @@ export function assignSides(dets, prev, reach) {
     const d = dets[0];
     return cost(d, 'left') < cost(d, 'right') ? { left: d, right: null } : { left: null, right: d };
   }
-  // best two (the tracker returns at most maxHands)
+  // the best two (the tracker returns at most maxHands)
   const [a, b] = dets;
-  const ab = cost(a, 'left') + cost(b, 'right');
-  const ba = cost(b, 'left') + cost(a, 'right');
+  const crossed = (l, r) => (l.landmarks[0] > r.landmarks[0] ? CROSSED : 0);
+  const ab = cost(a, 'left') + cost(b, 'right') + crossed(a, b);
+  const ba = cost(b, 'left') + cost(a, 'right') + crossed(b, a);
   return ab <= ba ? { left: a, right: b } : { left: b, right: a };
 }
 
@@ -315,13 +326,14 @@ export async function runPipeline(source, options, hooks = {}) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
       const m = options.models ?? {};
+      const detectGap = options.detectGap ?? 2;
       if (m.palmSession && m.landmarkSession) {
-        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2 });
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2 });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap });
       }
     }
     if (options.depthModel) {
