@@ -138,7 +138,9 @@ async function start(meta, options) {
     const hands = handModels(options);
     const nets = await networks(options.modelKind || 'lite');
     const source = { width: meta.width, height: meta.height, fps: meta.fps, frameCount: meta.frameCount ?? null, frames: frames.iterable };
-    const threads = options.threads || (self.crossOriginIsolated ? Math.min(2, navigator.hardwareConcurrency || 1) : 1);
+    // onnxruntime's threads: all cores but one (the page decodes the video meanwhile), at most 4;
+    // threads need cross-origin isolation (SharedArrayBuffer).
+    const threads = options.threads || (self.crossOriginIsolated ? Math.max(1, Math.min(4, (navigator.hardwareConcurrency || 2) - 1)) : 1);
     ort.env.wasm.numThreads = threads;
     const opts = {
       core: state.core, ort,
