@@ -107,7 +107,10 @@ function setBusy(b) {
 }
 
 function finishRun() {
-  if (app.run) { app.run.finished = true; if (app.run.wake) app.run.wake(); clearTimeout(app.run.killTimer); }
+  if (app.run) {
+    app.run.finished = true; if (app.run.wake) app.run.wake(); clearTimeout(app.run.killTimer);
+    ui.stage.textContent = 'stopped'; ui.progress.value = 0;
+  }
   app.run = null;
   setBusy(false);
 }

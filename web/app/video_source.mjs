@@ -53,16 +53,23 @@ export async function openVideo(video, url, name = 'video', timeoutMs = 20000) {
   return { width, height, duration };
 }
 
-function nextPresented(video, draw) {
+function nextPresented(video, draw, timeoutMs = 15000) {
   return new Promise((resolve, reject) => {
     let done = false;
-    const onEnd = () => { if (!done) { done = true; video.removeEventListener('error', onErr); resolve(null); } };
-    const onErr = () => { if (!done) { done = true; video.removeEventListener('ended', onEnd); reject(mediaError(video, 'video')); } };
+    const timer = setTimeout(() => {
+      if (done) return;
+      done = true;
+      video.pause();
+      reject(new InputError('video', `The video stopped decoding at ${video.currentTime.toFixed(2)} s (no new frame for ${timeoutMs / 1000} s).`));
+    }, timeoutMs);
+    const onEnd = () => { if (!done) { done = true; clearTimeout(timer); video.removeEventListener('error', onErr); resolve(null); } };
+    const onErr = () => { if (!done) { done = true; clearTimeout(timer); video.removeEventListener('ended', onEnd); reject(mediaError(video, 'video')); } };
     video.addEventListener('ended', onEnd, { once: true });
     video.addEventListener('error', onErr, { once: true });
     video.requestVideoFrameCallback((now, md) => {
       if (done) return;
       done = true;
+      clearTimeout(timer);
       const px = draw();           // inside the callback: exactly the presented frame
       video.pause();
       video.removeEventListener('ended', onEnd);
@@ -70,7 +77,7 @@ function nextPresented(video, draw) {
       resolve({ mediaTime: md.mediaTime, presentedFrames: md.presentedFrames, px });
     });
     const p = video.play();
-    if (p && p.catch) p.catch((e) => { if (!done) { done = true; reject(new InputError('video', `The browser refused to play the video: ${e.message}`)); } });
+    if (p && p.catch) p.catch((e) => { if (!done) { done = true; clearTimeout(timer); reject(new InputError('video', `The browser refused to play the video: ${e.message}`)); } });
   });
 }
 
