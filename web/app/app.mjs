@@ -87,6 +87,7 @@ function onWorker(m, resolveReady) {
       showMessage(errorText(m.kind, m.message));
       break;
     case 'exported': onExported(m); break;
+    case 'stats': if (app.statsWaiter) { app.statsWaiter(m.stats); app.statsWaiter = null; } break;
     default: break;
   }
 }
@@ -417,5 +418,10 @@ window.addEventListener('drop', (e) => e.preventDefault());
 
 app.view = { scene, overlay, setFrame, play, pause };
 app.sceneSummary = () => scene.summary();
+/// Memory of the worker's WebAssembly core and JavaScript heap, and of the page's heap.
+app.stats = () => new Promise((resolve) => {
+  app.statsWaiter = (w) => resolve({ ...w, pageJsHeapBytes: performance.memory ? performance.memory.usedJSHeapSize : null });
+  app.worker.postMessage({ type: 'stats' });
+});
 app.exportFile = (format) => new Promise((resolve) => { exportWaiters.set(format, resolve); app.worker.postMessage({ type: 'export', format }); });
 startWorker().catch(() => {});

@@ -226,6 +226,9 @@ self.onmessage = async (ev) => {
       case 'end': if (state.run) state.run.frames.end(); break;
       case 'cancel': if (state.run) state.run.controller.abort(); break;
       case 'load-result': await loadResult(m.text, m.options || {}); break;
+      case 'stats': post({ type: 'stats', stats: {
+        coreHeapBytes: state.core && state.core.HEAPU8 ? state.core.HEAPU8.length : null,
+        jsHeapBytes: self.performance && performance.memory ? performance.memory.usedJSHeapSize : null } }); break;
       case 'export': { const x = await exportResult(m.format); post({ type: 'exported', format: m.format, ...x }, x.data.buffer ? [x.data.buffer] : []); break; }
       default: fail('internal', `worker: unknown message ${m.type}`);
     }

@@ -58,7 +58,8 @@ page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
 page.on('pageerror', (e) => errors.push(e.message));
 let peak = 0;
 const samples = [];
-const timer = setInterval(() => { try { const r = treePss(pid); samples.push(r); if (r > peak) peak = r; } catch { /* ps raced */ } }, 500);
+const tBench = Date.now();
+const timer = setInterval(() => { try { const r = treePss(pid); samples.push([Date.now() - tBench, r]); if (r > peak) peak = r; } catch { /* ps raced */ } }, 500);
 try {
   const t0 = Date.now();
   await page.goto(url);
@@ -70,14 +71,19 @@ try {
   const idle = treePss(pid);
   const t1 = Date.now();
   await page.setInputFiles('#file-video', resolve(video));
+  const progress = setInterval(() => page.textContent('#stage').then((t) => process.stderr.write(`bench_app: ${t}   \r`), () => {}), 5000);
   await page.waitForFunction(() => document.body.dataset.busy === '0' && (window.haworApp.result || !document.getElementById('message').hidden),
     null, { timeout: 3600 * 1000, polling: 1000 });
   const wallMs = Date.now() - t1;
+  clearInterval(progress);
   const msg = await page.evaluate(() => { const m = document.getElementById('message'); return m.hidden ? null : m.textContent; });
   const run = await page.evaluate(() => window.haworApp.lastRun);
   const scene = await page.evaluate(() => window.haworApp.sceneSummary());
   if (opt('--screenshot')) await page.screenshot({ path: opt('--screenshot') });
-  console.log(JSON.stringify({ video, readyMs, wallMs, message: msg, run, scene, memory: { idleMB: idle / 2 ** 20, peakMB: peak / 2 ** 20, samples: samples.length },
+  const heaps = await page.evaluate(() => window.haworApp.stats());
+  // The memory over time, one point every ~10 s (ms since the start, MB).
+  const timeline = samples.filter((_, i) => i % 20 === 0).map(([t, b]) => [t, Math.round(b / 2 ** 20)]);
+  console.log(JSON.stringify({ video, readyMs, wallMs, message: msg, run, scene, memory: { idleMB: idle / 2 ** 20, peakMB: peak / 2 ** 20, samples: samples.length, heaps, timeline },
     consoleErrors: errors }, null, 1));
 } finally {
   clearInterval(timer);
