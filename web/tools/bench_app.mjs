@@ -31,14 +31,22 @@ function treePss(pid) {
     kids.get(pp).push(p);
   }
   let sum = 0;
+  const byType = {};
   const stack = [...(kids.get(pid) || [])];
   while (stack.length) {
     const p = stack.pop();
-    try { const m = /^Pss:\s+(\d+) kB/m.exec(readFileSync(`/proc/${p}/smaps_rollup`, 'utf8')); if (m) sum += Number(m[1]) * 1024; } catch { /* exited */ }
+    try {
+      const m = /^Pss:\s+(\d+) kB/m.exec(readFileSync(`/proc/${p}/smaps_rollup`, 'utf8'));
+      const cmd = readFileSync(`/proc/${p}/cmdline`, 'utf8');
+      const type = (/--type=([a-z-]+)/.exec(cmd) || [, 'browser'])[1] + ((/--utility-sub-type=([\w.]+)/.exec(cmd) || [, ''])[1] ? `:${/--utility-sub-type=([\w.]+)/.exec(cmd)[1]}` : '');
+      if (m) { sum += Number(m[1]) * 1024; byType[type] = (byType[type] || 0) + Number(m[1]) * 1024; }
+    } catch { /* exited */ }
     for (const k of kids.get(p) || []) stack.push(k);
   }
+  lastByType = byType;
   return sum;
 }
+let lastByType = {};
 
 const server = createServer(root);
 await new Promise((r) => server.listen(Number(opt('--port', 0)), '127.0.0.1', r));
@@ -59,7 +67,9 @@ page.on('pageerror', (e) => errors.push(e.message));
 let peak = 0;
 const samples = [];
 const tBench = Date.now();
-const timer = setInterval(() => { try { const r = treePss(pid); samples.push([Date.now() - tBench, r]); if (r > peak) peak = r; } catch { /* ps raced */ } }, 500);
+const mb = (o) => Object.fromEntries(Object.entries(o).map(([k, v]) => [k, Math.round(v / 2 ** 20)]));
+let peakByType = {};
+const timer = setInterval(() => { try { const r = treePss(pid); samples.push([Date.now() - tBench, r]); if (r > peak) { peak = r; peakByType = lastByType; } } catch { /* ps raced */ } }, 500);
 try {
   const t0 = Date.now();
   await page.goto(url);
@@ -69,13 +79,22 @@ try {
   if (opt('--max-frames')) await page.fill('#opt-maxframes', String(opt('--max-frames')));
   await page.selectOption('#opt-model', opt('--model', 'lite'));
   const idle = treePss(pid);
+  const idleByType = lastByType;
   const t1 = Date.now();
   await page.setInputFiles('#file-video', resolve(video));
+  // The page's own breakdown (JavaScript realms: page, worker; ArrayBuffers and WebAssembly
+  // memories included) 30 s into processing.
+  let uaMemory = null;
+  const uaTimer = setTimeout(() => page.evaluate(async () => {
+    const m = await performance.measureUserAgentSpecificMemory();
+    return { bytes: m.bytes, breakdown: m.breakdown.filter((b) => b.bytes > 1e6).map((b) => ({ MB: Math.round(b.bytes / 2 ** 20), types: b.types, scope: b.attribution.map((a) => a.scope) })) };
+  }).then((m) => { uaMemory = m; }, (e) => { uaMemory = String(e.message || e); }), 30000);
   const progress = setInterval(() => page.textContent('#stage').then((t) => process.stderr.write(`bench_app: ${t}   \r`), () => {}), 5000);
   await page.waitForFunction(() => document.body.dataset.busy === '0' && (window.haworApp.result || !document.getElementById('message').hidden),
     null, { timeout: 3600 * 1000, polling: 1000 });
   const wallMs = Date.now() - t1;
   clearInterval(progress);
+  clearTimeout(uaTimer);
   const msg = await page.evaluate(() => { const m = document.getElementById('message'); return m.hidden ? null : m.textContent; });
   const run = await page.evaluate(() => window.haworApp.lastRun);
   const scene = await page.evaluate(() => window.haworApp.sceneSummary());
@@ -83,7 +102,7 @@ try {
   const heaps = await page.evaluate(() => window.haworApp.stats());
   // The memory over time, one point every ~10 s (ms since the start, MB).
   const timeline = samples.filter((_, i) => i % 20 === 0).map(([t, b]) => [t, Math.round(b / 2 ** 20)]);
-  console.log(JSON.stringify({ video, readyMs, wallMs, message: msg, run, scene, memory: { idleMB: idle / 2 ** 20, peakMB: peak / 2 ** 20, samples: samples.length, heaps, timeline },
+  console.log(JSON.stringify({ video, readyMs, wallMs, message: msg, run, scene, memory: { idleMB: idle / 2 ** 20, idleByTypeMB: mb(idleByType), peakMB: peak / 2 ** 20, peakByTypeMB: mb(peakByType), samples: samples.length, heaps, uaMemory, timeline },
     consoleErrors: errors }, null, 1));
 } finally {
   clearInterval(timer);
