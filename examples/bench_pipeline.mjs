@@ -11,7 +11,10 @@
 //   network    the MediaPipe networks find the rendered hands (the real product path);
 //   simulated  the ground-truth keypoints projected into the image + Gaussian noise (--noise-px)
 //              and the camera-frame keypoints + noise (--noise-mm) as "world landmarks", fed to
-//              the same pipeline after perception (options.observations).
+//              the same pipeline after perception (options.observations);
+//   MODE+depth either, with the rendered depth corrupted as in the scale benchmark (per-keyframe
+//              ±5 % bias, 5 % noise, 10 % outliers) as the metric-depth network.
+// --mode takes a list, e.g. network,simulated,network+depth,simulated+depth.
 // Metrics (DESIGN §8, the core's evaluateHands / evaluateCameras), per hand on the frames where
 // the hand is in view and was observed, then the mean of the two hands: PA-MPJPE, W-MPJPE,
 // WA-MPJPE (mm), RTE (%), Accel (m/s²); camera: ATE and ATE-S (mm, Sim(3) / SE(3) alignment);
@@ -25,6 +28,7 @@ import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { decodeFrames, handModelFiles, loadCore, probeVideo } from '../web/cli.mjs';
 import { runPipeline } from '../web/src/pipeline/run.mjs';
+import { decodeNpy } from '../web/tools/npy.mjs';
 
 const repo = resolve(dirname(fileURLToPath(import.meta.url)), '..');
 
@@ -111,6 +115,27 @@ export function simulatedObservations(gt, seq, T, noisePx, noiseMm, seed) {
   };
 }
 
+/** A metric-depth source from the rendered depth (options.depthModel.predict): per keyframe a
+ *  ±5 % bias, 5 % noise per pixel and 10 % outliers in [0.1, 5] m, hands left in (the pipeline's
+ *  masks drop them), as the scale benchmark corrupts it. */
+export function noisyTrueDepth(seq, seed) {
+  const n = rng(seed);
+  return {
+    predict: async (frame, rgb, width, height) => {
+      const { data } = decodeNpy(new Uint8Array(readFileSync(join(seq.dir, 'depth', `${String(frame).padStart(6, '0')}.npy`))));
+      if (data.length !== width * height) throw new Error('noisyTrueDepth: the SLAM runs at another size than the rendered depth');
+      const bias = 1 + 0.05 * Math.max(-1, Math.min(1, n()));
+      const out = new Float32Array(data.length);
+      for (let i = 0; i < data.length; ++i) {
+        // |N| > 1.645 on 10 % of the pixels: an outlier, uniform-ish in [0.1, 5] m
+        const z = n();
+        out[i] = Math.abs(z) > 1.645 ? 0.1 + 4.9 * ((Math.abs(z) * 7.31) % 1) : data[i] * bias * (1 + 0.05 * n());
+      }
+      return out;
+    },
+  };
+}
+
 /** Accuracy of a result against a sequence's ground truth. */
 export function evaluate(core, result, gt, seq, gtCam) {
   const T = result.frameCount;
@@ -182,7 +207,8 @@ async function main() {
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
           ...(o.fov ? { fovDeg: o.fov } : { focalPx: seq.fx }) };
-        if (mode === 'simulated') options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
+        if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
+        if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);
         const t0 = performance.now();
         const result = await runPipeline(source, options, {});
         const wall = performance.now() - t0;

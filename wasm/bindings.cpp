@@ -20,8 +20,9 @@
 //       c = 1 grey, 3 RGB or 4 RGBA; mask: Uint8Array(W*H), hand != 0, or null) -> status; .finish() -> {rotations (9T, row-major R_c2w),
 //       translations (3T), status: Uint8Array(T) (0 tracked, 1 interpolated, 2 lost,
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
-//       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, numKeyframes,
-//       numLosses, numResets, initialised}
+//       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
+//       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
+//       numResets, initialised}
 //   metricScale({rotations, translations, fps?, keyframeDepths?, depthMaps?: [Float32Array],
 //       depthWidth?, depthHeight?, masks?: [Uint8Array|null], hands?: [{positions (3T), valid}],
 //       sampling?: 'slam-depth'|'official', combine?: 'huber'|'median'})
@@ -356,6 +357,10 @@ class MonoSlam {
       kd.set("uv", f64(uv.data(), uv.size()));
       kd.set("depth", f64(depth.data(), depth.size()));
       o.set("keyframeDepths", kd);
+      std::vector<double> pts;
+      pts.reserve(3 * r.points.size());
+      for (const auto& X : r.points) pts.insert(pts.end(), {X(0), X(1), X(2)});
+      o.set("points", f64(pts.data(), pts.size()));
       o.set("numKeyframes", r.numKeyframes);
       o.set("numLosses", r.numLosses);
       o.set("numResets", r.numResets);

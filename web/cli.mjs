@@ -203,6 +203,9 @@ export async function main(argv) {
   const palm = join(o.models, `palm_detection_${o.model}.onnx`);
   const lm = join(o.models, `hand_landmark_${o.model}.onnx`);
   for (const f of [palm, lm]) if (!existsSync(f)) throw fail(`${f}: missing (scripts/install.sh converts the models)`);
+  const depthConfig = o.depthModel ? o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json') : null;
+  if (o.depthModel && !existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
+  if (o.depthModel && !existsSync(depthConfig)) throw fail(`${depthConfig}: the depth model's config is missing (give --depth-config)`);
   const info = probeVideo(o.video);
   let { width, height } = info;
   let scaleTo = null;
@@ -215,12 +218,7 @@ export async function main(argv) {
   const hm = handModelFiles(o);
   const handModels = { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right };
   let depthModel;
-  if (o.depthModel) {
-    const cfg = o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json');
-    if (!existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
-    if (!existsSync(cfg)) throw fail(`${cfg}: the depth model's config is missing (give --depth-config)`);
-    depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(cfg, 'utf8') };
-  }
+  if (o.depthModel) depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(depthConfig, 'utf8') };
   const tLoad = performance.now();
   const core = await loadCore(o.core ?? process.env.HAWOR_CORE ?? join(repo, 'build', 'wasm', 'wasm', 'hawor_core.mjs'));
   const ort = await import('onnxruntime-web');
@@ -231,10 +229,12 @@ export async function main(argv) {
   const total = o.maxFrames ? Math.min(o.maxFrames, info.frameCount ?? Infinity) : info.frameCount;
   const source = { width, height, fps: info.fps, frameCount: Number.isFinite(total) ? total : null,
     frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming) };
+  const cpu0 = process.cpuUsage();
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
     handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
   }, { onProgress: progressBar(source.frameCount) });
+  const cpu = process.cpuUsage(cpu0);
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
   if (scaleTo) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
   const tw = performance.now();
@@ -245,7 +245,8 @@ export async function main(argv) {
   result.timings.write = performance.now() - tw;
   writeFileSync(join(o.out, 'result.json'), resultToJson(result));
   const T = result.frameCount;
-  process.stderr.write(`${timingTable(result.timings, T)}\n`);
+  const cpuMsPerFrame = (cpu.user + cpu.system) / 1000 / T;
+  process.stderr.write(`${timingTable(result.timings, T)}\nCPU time of this process (all its threads, model loading included): ${cpuMsPerFrame.toFixed(1)} ms per frame\n`);
   for (const w of result.warnings) process.stderr.write(`hawor: warning: ${w}\n`);
   const count = (a) => Array.from(a).reduce((s, v) => s + (v ? 1 : 0), 0);
   const summary = {
@@ -253,6 +254,7 @@ export async function main(argv) {
     noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
     scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,
     msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),
+    cpuMsPerFrame: Number(cpuMsPerFrame.toFixed(1)),
   };
   process.stdout.write(`${JSON.stringify(summary)}\n`);
   return 0;

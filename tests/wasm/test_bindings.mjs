@@ -438,6 +438,12 @@ if (!haveNative || !fs.existsSync(path.join(nativeDir, 'models', 'hand_right.npz
   check('SLAM output sizes', res.rotations.length === 9 * Tn && res.translations.length === 3 * Tn &&
     res.status.length === Tn && res.keyframe.length === Tn && res.initialised && res.numKeyframes >= 2 &&
     res.keyframeDepths.frames.length === res.numKeyframes && res.keyframeDepths.depth.length > 100);
+  // the final map points: finite, (N, 3), in front of the first camera for most of them
+  const nPts = res.points ? res.points.length / 3 : 0;
+  let inFront = 0;
+  for (let i = 0; i < nPts; i++) inFront += res.points[3 * i + 2] > 0 ? 1 : 0;
+  check('SLAM map points', res.points instanceof Float64Array && res.points.length % 3 === 0 && nPts > 10 &&
+    res.points.every(Number.isFinite) && inFront > 0.8 * nPts, `${nPts} points, ${inFront} in front`);
   // Native on the same frames.
   run(['slam', '--images', path.join(seq, 'rgb'), '--masks', path.join(seq, 'mask'), '--intrinsics', [...Ks].join(','),
     '--out', path.join(tmp, 'native.tum')]);

@@ -40,6 +40,24 @@ async function loadCore() {
   return corePromise;
 }
 
+test('pipeline: run.mjs and exports.mjs import nothing node-only (they run in a Web Worker)', () => {
+  const seen = new Set();
+  const visit = (file) => {
+    if (seen.has(file)) return;
+    seen.add(file);
+    const src = readFileSync(file, 'utf8');
+    for (const m of src.matchAll(/^\s*(?:import|export)\s[^'"]*?from\s+['"]([^'"]+)['"]/gm)) {
+      const spec = m[1];
+      assert.ok(spec.startsWith('./') || spec.startsWith('../'), `${file} imports '${spec}' (only relative imports run in a worker without a bundler)`);
+      visit(join(file, '..', spec));
+    }
+    assert.doesNotMatch(src, /\b(require\(|process\.|import\(['"]node:)/, `${file} uses node-only APIs`);
+  };
+  visit(join(root, 'web/src/pipeline/run.mjs'));
+  visit(join(root, 'web/src/pipeline/exports.mjs'));
+  assert.ok(seen.size >= 6, [...seen].join(', '));
+});
+
 // --- pure helpers ----------------------------------------------------------------------------------
 
 test('pipeline: intrinsics from a focal or a diagonal field of view', () => {
@@ -216,6 +234,8 @@ test('pipeline CLI: usage errors exit 2; not a video, no video stream exit 1; 1 
     assert.equal(r.status, 2); assert.match(r.stderr, /--model must be lite or full/);
     r = runCli(['run', join(dir, 'none.mp4'), '--out', dir]);
     assert.equal(r.status, 1); assert.match(r.stderr, /none\.mp4: no such file/);
+    r = runCli(['run', cli, '--out', dir, '--depth-model', join(dir, 'none.onnx')]);
+    assert.equal(r.status, 1); assert.match(r.stderr, /none\.onnx: no such file/);
     writeFileSync(join(dir, 'text.mp4'), 'not a video\n');
     r = runCli(['run', join(dir, 'text.mp4'), '--out', join(dir, 'o1')]);
     assert.equal(r.status, 1); assert.match(r.stderr, /not a readable video/);
@@ -253,7 +273,12 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
   try {
     const seq = makeSequence(haworBin, 'table_work', 3, 60, '640x480', join(dir, 'seq'));
     const out = join(dir, 'out');
-    const r = runCli(['run', join(seq.dir, 'video.mp4'), '--out', out, '--focal', String(seq.fx), '--threads', '1']);
+    // the depth slot end to end with a tiny test network (its depth is meaningless: only the
+    // plumbing is checked, ONNX -> keyframe depth maps -> scale)
+    const { buildAffineDepthModel, affineDepthConfig } = await import('../../web/tools/make_test_depth_model.mjs');
+    writeFileSync(join(dir, 'affine.onnx'), buildAffineDepthModel({ width: 64, height: 48 }));
+    writeFileSync(join(dir, 'affine.json'), JSON.stringify(affineDepthConfig({ width: 64, height: 48 })));
+    const r = runCli(['run', join(seq.dir, 'video.mp4'), '--out', out, '--focal', String(seq.fx), '--threads', '1', '--depth-model', join(dir, 'affine.onnx')]);
     assert.equal(r.status, 0, r.stderr);
     const core = await loadCore();
     const result = JSON.parse(readFileSync(join(out, 'result.json'), 'utf8'));
@@ -275,6 +300,9 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
       assert.ok(h.metrics.wa_mpjpe < 80, `${s} WA-MPJPE ${h.metrics.wa_mpjpe} mm`);
     }
     assert.ok(result.slam.initialised, 'the SLAM initialised');
+    assert.ok(result.timings.depth > 0 && result.scale.keyframes === result.slam.numKeyframes, JSON.stringify(result.scale));
+    // the SLAM's map points (world, metres): finite, (N, 3)
+    assert.ok(result.points.length % 3 === 0 && result.points.length > 30 && result.points.every((v) => v !== null && Number.isFinite(v)), `${result.points.length / 3} points`);
     assert.ok(ev.ate < 0.1 * path * 1000, `ATE ${ev.ate} mm on a ${path} m path (${msg})`);
     // world.npz keys (read by the core's npz reader)
     const w = core.readNpz(new Uint8Array(readFileSync(join(out, 'world.npz'))), 'world.npz');
@@ -294,6 +322,19 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
     for (const s of ['left', 'right']) {
       assert.ok(es.perHand[s].metrics.pa_mpjpe < 6, `simulated ${s} PA-MPJPE ${es.perHand[s].metrics.pa_mpjpe}`);
       assert.ok(es.perHand[s].metrics.wa_mpjpe < 80, `simulated ${s} WA-MPJPE ${es.perHand[s].metrics.wa_mpjpe}`);
+    }
+    // ... and with a metric-depth source (the rendered depth, biased and noisy) on the keyframes:
+    // it runs on every keyframe; where it gives the scale (this short clip has few keyframes and
+    // few points in AdaSM's depth window, so it may not), that scale matches the truth
+    const { noisyTrueDepth } = await import('../../examples/bench_pipeline.mjs');
+    const withDepth = await runPipeline({ width: info.width, height: info.height, fps: 30, frameCount: 60,
+      frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, { decode: 0 }) },
+    { core, focalPx: seq.fx, handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)) },
+      observations: simulatedObservations(gt, seq, 60, 2, 5, 7), depthModel: noisyTrueDepth(seq, 11) });
+    const ed = evaluate(core, withDepth, gt, seq, gtCam);
+    assert.ok(withDepth.timings.depth > 0 && withDepth.scale.keyframes === withDepth.slam.numKeyframes, JSON.stringify(withDepth.scale));
+    if (['depth', 'fused'].includes(withDepth.scale.method)) {
+      assert.ok(Math.abs(1 / ed.simScale - 1) < 0.1, `scale off by ${1 / ed.simScale} (${JSON.stringify(withDepth.scale)})`);
     }
   } finally {
     rmSync(dir, { recursive: true, force: true });

@@ -22,8 +22,12 @@
 //                                        default: DEFAULT_DIAGONAL_FOV_DEG on the diagonal
 //           modelKind: 'lite' | 'full'   recorded in the result (the caller picks the bytes)
 //           depthModel?: { bytes, config }   a metric-depth ONNX + its JSON config (the slot of
-//                                        web/src/depth_model.mjs), run on the SLAM keyframes
-//           threads?                     recorded (the caller sets ort.env.wasm.numThreads)
+//                                        web/src/depth_model.mjs), run on the SLAM keyframes,
+//                        | { predict: async (frameIndex, rgb, width, height) => Float32Array }
+//                                        any other source of metric depth (metres, NaN unknown)
+//                                        at the SLAM resolution (benchmarks: ground truth)
+//           threads?                     onnxruntime's threads (ort.env.wasm.numThreads, set here
+//                                        if given; only effective before its first session)
 //           slamMaxSide? (640)           the SLAM and hand masks run on frames downscaled to
 //                                        this long side (intrinsics scaled alike)
 //           maxPixels? (MAX_PIXELS)      larger frames are refused with a clear error (the
@@ -33,7 +37,7 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
-//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2),
+//           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
 //           detectGap? (2)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
@@ -51,7 +55,7 @@
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
-//   points: (N*3) world points in metres (the SLAM keyframes' depths back-projected), may be empty,
+//   points: (N*3) the SLAM's final map points, world frame, metres; may be empty,
 //   scale: { scale, method: 'depth'|'hands'|'fused'|'none', confidence, ... (metricScale's fields) },
 //   hands: { left: Hand, right: Hand },  Hand = {
 //     valid (T: observed and fitted), infilled (T: filled by the infiller), present (any frame),
@@ -63,8 +67,10 @@
 //     jointsCam (T*21*3)                the fitted keypoints in the camera frame (NaN elsewhere)
 //     keypoints2d (T*21*2)              the detected image keypoints (NaN where not detected)
 //     reprojRmsPx (T), handPoseCols P, betaCols B, model: kind },
-//   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles),
-//   timings: { stage: total ms }, warnings: [strings], noHands: bool }
+//   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles; the vertices
+//          of frame t: core.HandModel(bytes).forward({rot, handPose, betas, trans} of frame t)),
+//   timings: { stage: total ms, load: model loading }, warnings: [strings], noHands: bool,
+//   stats: { palmRuns, landmarkRuns } (the tracker's; {} with observations) }
 //
 // Stages (timings keys): perception (networks + crops), fit (hand fit per hand), masks (hand
 // silhouettes at the SLAM resolution), slamPrep (downscale + grey), slam (tracking + mapping),
@@ -297,7 +303,7 @@ export async function runPipeline(source, options, hooks = {}) {
   const sy = ss.height / height;
   // The SLAM image's pixel (u', v') covers source pixels u = (u' + 0.5) / s - 0.5.
   const Ks = [intr.fx * sx, intr.fy * sy, (intr.cx + 0.5) * sx - 0.5, (intr.cy + 0.5) * sy - 0.5];
-  const dilate = options.maskDilatePx ?? 2;
+  const dilate = options.maskDilatePx ?? 2; // pixels at the SLAM resolution (see README: 8 px was no better)
   const infillMethod = options.infill ?? 'spline';
 
   const owned = []; // embind objects to delete
@@ -322,6 +328,9 @@ export async function runPipeline(source, options, hooks = {}) {
     owned.push(fitters.left, fitters.right);
     const P = { left: 3 * (models.left.numJoints() - 1), right: 3 * (models.right.numJoints() - 1) };
     const B = { left: models.left.numBetas(), right: models.right.numBetas() };
+    if (options.threads && options.ort && options.ort.env && options.ort.env.wasm && !options.models?.palmSession) {
+      options.ort.env.wasm.numThreads = options.threads; // effective before onnxruntime's first session only
+    }
     if (!options.observations) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
@@ -336,7 +345,10 @@ export async function runPipeline(source, options, hooks = {}) {
         tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap });
       }
     }
-    if (options.depthModel) {
+    if (options.depthModel && typeof options.depthModel.predict === 'function') {
+      const custom = options.depthModel;
+      depthModel = { predict: (rgb, w, h, c, frame) => custom.predict(frame, rgb, w, h) };
+    } else if (options.depthModel) {
       if (!options.ort) throw new Error('runPipeline: a depth model needs options.ort');
       depthModel = await DepthModel.create(options.ort, options.depthModel.bytes, options.depthModel.config);
     }
@@ -346,7 +358,8 @@ export async function runPipeline(source, options, hooks = {}) {
     owned.push(slam);
     const grey = new Uint8Array(ss.width * ss.height);
     const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
-    const keptRgb = depthModel ? [] : null;
+    const keptRgb = depthModel ? [] : null; // frames (and hand masks) for the depth of the keyframes
+    const keptMasks = depthModel ? [] : null;
     const prevWrist = { left: null, right: null };
     const reach = 0.15 * Math.hypot(width, height);
     let T = 0;
@@ -410,12 +423,13 @@ export async function runPipeline(source, options, hooks = {}) {
       // --- masks at the SLAM resolution ---
       t1 = now();
       const mask = maskHands.length ? core.renderHandMasks(ss.width, ss.height, Ks, maskHands, dilate) : null;
+      if (keptMasks) keptMasks.push(mask);
       addTime('masks', now() - t1);
       // --- SLAM ---
       t1 = now();
       // at the frame's own size the core converts to grey itself
       const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
-      if (keptRgb) keptRgb.push(downscaleRgb(rgba, width, height, c, ss.width, ss.height));
+      if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : downscaleRgb(rgba, width, height, c, ss.width, ss.height));
       addTime('slamPrep', now() - t1);
       t1 = now();
       info.slamStatus = slam.process(slamFrame, mask);
@@ -472,10 +486,14 @@ export async function runPipeline(source, options, hooks = {}) {
       depthMaps = [];
       for (let k = 0; k < frames.length; ++k) {
         checkAbort(signal);
-        depthMaps.push(await depthModel.predict(keptRgb[frames[k]], ss.width, ss.height, 3));
+        const map = await depthModel.predict(keptRgb[frames[k]], ss.width, ss.height, 3, frames[k]);
+        if (!(map instanceof Float32Array) || map.length !== ss.width * ss.height) {
+          throw new Error(`depth of keyframe ${frames[k]}: expected a Float32Array of ${ss.width}x${ss.height}`);
+        }
+        depthMaps.push(map);
         if (onProgress) onProgress({ stage: 'depth', done: k + 1, total: frames.length });
       }
-      keptRgb.length = 0;
+      keptRgb.length = 0; // the masks are still needed by the scale
       addTime('depth', now() - t1);
     }
 
@@ -493,7 +511,7 @@ export async function runPipeline(source, options, hooks = {}) {
     let scale = { scale: NaN, method: 'none', confidence: 0 };
     if (traj.initialised && (wristTracks.length || depthMaps)) {
       try {
-        const masksKf = depthMaps ? null : undefined;
+        const masksKf = depthMaps ? Array.from(traj.keyframeDepths.frames, (f) => keptMasks[f] ?? null) : undefined;
         scale = core.metricScale({
           rotations: traj.rotations, translations: traj.translations, fps,
           ...(depthMaps ? { keyframeDepths: traj.keyframeDepths, depthMaps, depthWidth: ss.width, depthHeight: ss.height, masks: masksKf } : {}),
@@ -524,10 +542,11 @@ export async function runPipeline(source, options, hooks = {}) {
       quaternions.set(matToQuat(traj.rotations, 9 * t), 4 * t);
       timestamps[t] = t / fps;
     }
-    // SLAM points: keyframe depths back-projected into the world
+    // SLAM points: the final map (cores before it was exported: the keyframe depths
+    // back-projected into the world, one point per keyframe observation)
     const kd = traj.keyframeDepths;
-    const points = new Float64Array(3 * kd.depth.length);
-    for (let q = 0; q < kd.depth.length; ++q) {
+    const points = traj.points ? traj.points.map((v) => s * v) : new Float64Array(3 * kd.depth.length);
+    for (let q = 0; !traj.points && q < kd.depth.length; ++q) {
       const f = kd.frames[kd.kf[q]];
       const z = kd.depth[q];
       const xc = ((kd.uv[2 * q] - Ks[2]) / Ks[0]) * z;
