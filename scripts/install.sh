@@ -7,7 +7,8 @@ pkgs=(build-essential cmake git pkg-config
       emscripten nodejs                        # the WebAssembly build and its runtime
       clang libclang-rt-14-dev                 # libFuzzer targets and sanitizers
       python3 python3-numpy python3-scipy      # independent references run by the tests
-      ffmpeg)                                  # decodes the sample clip for the hand-network tests
+      ffmpeg                                   # decodes the sample clip for the hand-network tests
+      chromium)                                # the browser app's end-to-end tests (headless)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -23,9 +24,11 @@ if ! command -v npm >/dev/null; then
 fi
 # npm packages of package.json (exact versions): the licence-free default hand (MIT),
 # onnxruntime-web (the depth slot, browser and node), pngjs (PNG frames in node),
-# @mediapipe/hands (the hand networks, Apache-2.0); devDependencies: the TFLite runtime
-# (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend, converter) that the tests use as
-# independent references. npm install runs when any of them is missing from node_modules or at
+# @mediapipe/hands (the hand networks, Apache-2.0), three (the app's 3D view, MIT);
+# devDependencies: the TFLite runtime (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend,
+# converter) that the tests use as independent references, playwright-core (drives Debian's
+# chromium in the browser tests, Apache-2.0; it downloads no browser) and gltf-validator (the
+# Khronos glTF validator, Apache-2.0, checks the app's GLB export). npm install runs when any of them is missing from node_modules or at
 # another version.
 root=$(cd "$(dirname "$0")/.." && pwd)
 missing_npm=$(cd "$root" && node -e '

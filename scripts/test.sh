@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test: native (Release), the JavaScript tests under node (tests/web), parsers under
 # ASan+UBSan (+ libFuzzer briefly, clang), the same unit tests compiled to WebAssembly under
-# node. Ends with "N passed, N failed".
+# node, the browser app in headless Chromium (tests/browser). Ends with "N passed, N failed".
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -69,6 +69,31 @@ run_node_suite() {
   ((fail == 0 && rc == 0)) || status=1
 }
 
+# run_browser_suite: the browser app end to end in headless Chromium (tests/browser), after the
+# WebAssembly core is built: scripts/build_web.sh adds the default hands and the synthetic sample
+# (build/web), then node's runner drives Debian's chromium through playwright-core.
+run_browser_suite() {
+  echo "=== [browser] scripts/build_web.sh + node --test tests/browser" >&2
+  local t0=$SECONDS
+  if ! HAWOR_JOBS="$jobs" bash scripts/build_web.sh >"$log_dir/browser-build.log" 2>&1; then
+    tail -20 "$log_dir/browser-build.log" >&2; echo "[browser] build_web.sh FAILED" >&2
+    total_fail=$((total_fail + 1)); status=1; return
+  fi
+  node --test --test-reporter=tap tests/browser/*.test.mjs 2>&1 | tee "$log_dir/browser-test.log"
+  local rc=${PIPESTATUS[0]} pass fail
+  pass=$(grep -E '^# pass [0-9]+$' "$log_dir/browser-test.log" | tail -1 | awk '{print $3}')
+  fail=$(grep -E '^# fail [0-9]+$' "$log_dir/browser-test.log" | tail -1 | awk '{print $3}')
+  if [[ -z "$pass" || -z "$fail" ]]; then
+    echo "[browser] no test summary" >&2; total_fail=$((total_fail + 1)); status=1; return
+  fi
+  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
+  if ((fail == 0 && rc != 0)); then
+    echo "[browser] node --test exited $rc" >&2; total_fail=$((total_fail + 1))
+  fi
+  ((fail == 0 && rc == 0)) || status=1
+  echo "=== [browser] done in $((SECONDS - t0)) s" >&2
+}
+
 # The native suite builds with clang when installed (the sanitizer and WebAssembly builds use it
 # too): clang 14 compiles this Eigen-heavy template code at -O1 in ~0.55x g++ 12's CPU time
 # (test_motion's unity file: 71 s vs 127 s). scripts/demo.sh makes the same choice, so the two
@@ -82,6 +107,7 @@ fi
 run_suite wasm emcmake cmake -DCMAKE_BUILD_TYPE=Release
 # after the WebAssembly build: the pipeline tests (tests/web/pipeline.test.mjs) run its hawor_core.mjs
 run_node_suite
+run_browser_suite
 
 echo "$total_pass passed, $total_fail failed"
 exit $status

@@ -1,0 +1,274 @@
+// End-to-end tests of the browser app in headless Chromium (npm playwright-core driving Debian's
+// /usr/bin/chromium, DESIGN §9): page load and cross-origin isolation, the error messages (corrupt
+// file, huge resolution, clip too short, wrong MANO file), cancel, the synthetic sample and the
+// real clip (../shared/data/egocentric_kitchen.mp4, its first HAWOR_KITCHEN_FRAMES frames, default
+// 40, at 640 px; skipped with a message when absent) through the file input, the 3D scene, every
+// export (npz read by numpy, GLB by three's GLTFLoader and the Khronos validator, JSON, TUM), and a
+// console free of errors. Screenshots, exports and timings go to build/browser-test/.
+//
+//   bash scripts/build_web.sh && node --test tests/browser/
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve, dirname } from 'node:path';
+import { spawnSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+import { createServer } from '../../web/server.mjs';
+
+const root = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+const out = join(root, 'build/browser-test');
+const CHROMIUM = process.env.HAWOR_CHROMIUM || '/usr/bin/chromium';
+const KITCHEN = resolve(root, '../shared/data/egocentric_kitchen.mp4');
+const KITCHEN_FRAMES = Number(process.env.HAWOR_KITCHEN_FRAMES || 40);
+const PY = '/usr/bin/python3';
+const FLAGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
+
+const needed = ['build/wasm/wasm/hawor_core.mjs', 'build/wasm/wasm/hawor_core.wasm', 'build/web/sample.webm',
+  'build/web/sample.json', 'build/web/hand_left.npz', 'build/web/hand_right.npz', 'web/models/palm_detection_lite.onnx',
+  'web/models/hand_landmark_lite.onnx'];
+const missing = needed.filter((f) => !existsSync(join(root, f)));
+const noChromium = !existsSync(CHROMIUM);
+if (noChromium) console.log(`# SKIP browser tests: ${CHROMIUM} not found (apt-get install chromium; scripts/install.sh does)`);
+
+let server, url, context, page, dataDir;
+const consoleErrors = [];
+const timings = {};
+
+before(async () => {
+  if (noChromium) return;
+  assert.deepEqual(missing, [], `missing build outputs (run scripts/build_web.sh): ${missing.join(', ')}`);
+  mkdirSync(out, { recursive: true });
+  server = createServer(root);
+  await new Promise((r) => server.listen(0, '127.0.0.1', r));
+  url = `http://127.0.0.1:${server.address().port}/`;
+  const { chromium } = await import('playwright-core');
+  dataDir = mkdtempSync(join(tmpdir(), 'hawor-chromium-'));
+  context = await chromium.launchPersistentContext(dataDir, {
+    executablePath: CHROMIUM, headless: true, args: FLAGS, viewport: { width: 1400, height: 900 }, acceptDownloads: true,
+  });
+  page = context.pages()[0] || await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  page.on('pageerror', (e) => consoleErrors.push(`pageerror: ${e.message}`));
+});
+
+after(async () => {
+  if (context) await context.close();
+  if (server) server.close();
+  if (dataDir) rmSync(dataDir, { recursive: true, force: true });
+  if (Object.keys(timings).length) writeFileSync(join(out, 'timings.json'), JSON.stringify(timings, null, 2));
+});
+
+const skip = noChromium ? 'chromium not installed' : false;
+
+async function message() {
+  return page.evaluate(() => { const m = document.getElementById('message'); return m.hidden ? null : { kind: m.dataset.kind, text: m.textContent }; });
+}
+async function waitDone(timeout) {
+  await page.waitForFunction(() => document.body.dataset.busy === '0' && (window.haworApp.result || !document.getElementById('message').hidden), null, { timeout });
+}
+async function expectError(kindText, timeout = 30000) {
+  await page.waitForFunction(() => !document.getElementById('message').hidden && document.body.dataset.busy !== '1', null, { timeout });
+  const m = await message();
+  assert.ok(m && m.text.startsWith(kindText), `expected a message starting "${kindText}", got ${JSON.stringify(m)}`);
+  return m.text;
+}
+function ffmpeg(args) {
+  const r = spawnSync('ffmpeg', ['-v', 'error', '-y', ...args], { encoding: 'utf8' });
+  assert.equal(r.status, 0, `ffmpeg ${args.join(' ')}: ${r.stderr}`);
+}
+async function download(format) {
+  const d = page.waitForEvent('download', { timeout: 60000 });
+  await page.click(`[data-export="${format}"]`);
+  const failed = page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 60000 }).then(() => null, () => null);
+  const dl = await Promise.race([d, failed]);
+  if (!dl) throw new Error(`export ${format}: ${JSON.stringify(await message())}`);
+  const file = join(out, dl.suggestedFilename());
+  await dl.saveAs(file);
+  return file;
+}
+
+test('the page loads cross-origin isolated, ready within 3 s', { skip }, async () => {
+  const t0 = Date.now();
+  const resp = await page.goto(url);
+  assert.equal(resp.headers()['cross-origin-opener-policy'], 'same-origin');
+  assert.equal(resp.headers()['cross-origin-embedder-policy'], 'require-corp');
+  await page.waitForSelector('body[data-ready="1"]', { timeout: 30000 });
+  timings.pageReadyMs = Date.now() - t0;
+  timings.pageReadyInPageMs = await page.evaluate(() => window.haworApp.readyMs);
+  assert.equal(await page.evaluate(() => self.crossOriginIsolated), true);
+  assert.ok(timings.pageReadyMs <= 3000, `page ready after ${timings.pageReadyMs} ms`);
+});
+
+test('bad inputs give clear messages and the app stays usable', { skip }, async () => {
+  const dir = join(out, 'inputs');
+  mkdirSync(dir, { recursive: true });
+  // A corrupt video: random bytes behind an MP4 name.
+  const junk = Buffer.alloc(200000);
+  for (let i = 0; i < junk.length; i++) junk[i] = (i * 2654435761) >>> 24;
+  writeFileSync(join(dir, 'corrupt.mp4'), junk);
+  await page.setInputFiles('#file-video', join(dir, 'corrupt.mp4'));
+  const corrupt = await expectError('Unsupported or corrupt video');
+  assert.match(corrupt, /corrupt\.mp4/);
+  // A huge resolution (5000 px wide) and a clip too short (4 frames).
+  ffmpeg(['-f', 'lavfi', '-i', 'testsrc=size=5000x64:rate=10', '-frames:v', '3', '-c:v', 'libvpx-vp9', '-deadline', 'realtime', join(dir, 'huge.webm')]);
+  await page.setInputFiles('#file-video', join(dir, 'huge.webm'));
+  assert.match(await expectError('Resolution too large'), /5000×64/);
+  ffmpeg(['-f', 'lavfi', '-i', 'testsrc=size=320x240:rate=30', '-frames:v', '4', '-c:v', 'libvpx-vp9', '-deadline', 'realtime', join(dir, 'short.webm')]);
+  await page.setInputFiles('#file-video', join(dir, 'short.webm'));
+  await expectError('Clip too short');
+  // A clip without hands (flat grey): processed, then said so.
+  ffmpeg(['-f', 'lavfi', '-i', 'color=c=gray:size=320x240:rate=30', '-frames:v', '12', '-c:v', 'libvpx-vp9', '-deadline', 'realtime', join(dir, 'grey.webm')]);
+  await page.setInputFiles('#file-video', join(dir, 'grey.webm'));
+  assert.match(await expectError('No hands found', 60000), /no hand was detected/);
+  assert.equal((await page.evaluate(() => window.haworApp.result.frameCount)), 12);
+  // A wrong MANO file: refused before any frame is processed.
+  writeFileSync(join(dir, 'MANO_RIGHT.pkl'), Buffer.from('this is not a pickle'));
+  await page.setInputFiles('#file-mano-right', join(dir, 'MANO_RIGHT.pkl'));
+  assert.match(await page.textContent('#models-note'), /MANO_RIGHT\.pkl/);
+  await page.click('#btn-sample');
+  assert.match(await expectError('Wrong MANO file', 60000), /right MANO file "MANO_RIGHT\.pkl"/);
+  // A MANO file given for the wrong side.
+  await page.setInputFiles('#file-mano-left', join(dir, 'MANO_RIGHT.pkl'));
+  await expectError('Wrong MANO file');
+  await page.click('#btn-clear-models');
+  assert.match(await page.textContent('#models-note'), /default/);
+  await page.screenshot({ path: join(out, 'error-message.png') });
+});
+
+test('cancel stops a run; the next run starts cleanly', { skip }, async () => {
+  await page.click('#btn-sample');
+  await page.waitForFunction(() => /frames: [3-9]|frames: \d\d/.test(document.getElementById('stage').textContent), null, { timeout: 60000 });
+  await page.click('#btn-cancel');
+  await page.waitForFunction(() => document.body.dataset.busy === '0', null, { timeout: 15000 });
+  const m = await message();
+  assert.ok(m && m.kind === 'info' && /Cancelled/.test(m.text), JSON.stringify(m));
+  assert.equal(await page.evaluate(() => window.haworApp.result), null);
+});
+
+async function checkScene(T, label) {
+  const s = await page.evaluate(() => window.haworApp.sceneSummary());
+  assert.ok(s, `${label}: no scene`);
+  assert.equal(s.cameraPath, T, `${label}: camera path of ${s.cameraPath} poses for ${T} frames`);
+  const hands = Object.values(s.hands).filter((h) => h.frames > 0);
+  assert.ok(hands.length >= 1, `${label}: no hand track in the scene ${JSON.stringify(s)}`);
+  for (const h of hands) assert.ok(h.trackPoints >= 2 && h.vertices > 700, `${label}: ${JSON.stringify(h)}`);
+  assert.ok(s.frustum, `${label}: no camera frustum`);
+  return s;
+}
+
+test('the synthetic sample: views, timeline and every export', { skip }, async () => {
+  const t0 = Date.now();
+  await page.click('#btn-sample');
+  await waitDone(120000);
+  assert.equal(await message(), null, 'no message after the sample');
+  const run = await page.evaluate(() => window.haworApp.lastRun);
+  timings.sample = { wallMs: Date.now() - t0, ...run };
+  const result = await page.evaluate(() => ({ T: window.haworApp.result.frameCount, w: window.haworApp.result.width, fps: window.haworApp.result.fps }));
+  assert.equal(result.T, 60, 'all 60 frames of the sample');
+  const s = await checkScene(60, 'sample');
+  assert.ok(s.hands.left.frames > 0 && s.hands.right.frames > 0, `both hands of the sample: ${JSON.stringify(s.hands)}`);
+  assert.ok(s.points > 50, `SLAM points: ${s.points}`);
+  // The timeline drives the views.
+  await page.fill('#scrub', '30');
+  await page.dispatchEvent('#scrub', 'input');
+  assert.equal(await page.evaluate(() => window.haworApp.sceneSummary().frame), 30);
+  assert.match(await page.textContent('#frame-label'), /frame 31\/60/);
+  await page.click('#btn-play');
+  await page.waitForTimeout(500);
+  await page.click('#btn-play');
+  await page.waitForTimeout(100);
+  await page.screenshot({ path: join(out, 'sample.png') });
+
+  // Exports.
+  const json = JSON.parse(readFileSync(await download('json'), 'utf8'));
+  assert.equal(json.version, 1);
+  assert.equal(json.frameCount, 60);
+  assert.equal(json.camera.positions.length, 60 * 3);
+  const tum = readFileSync(await download('tum'), 'utf8').split('\n').filter((l) => l && !l.startsWith('#'));
+  assert.equal(tum.length, 60);
+  for (const l of tum) { const v = l.trim().split(/\s+/).map(Number); assert.equal(v.length, 8); assert.ok(v.every(Number.isFinite), l); }
+  const npz = await download('npz');
+  const py = spawnSync(PY, ['-c', `
+import json, sys, numpy as np
+d = np.load(sys.argv[1])
+print(json.dumps({k: list(d[k].shape) for k in d.files}))`, npz], { encoding: 'utf8' });
+  assert.equal(py.status, 0, py.stderr);
+  const shapes = JSON.parse(py.stdout);
+  for (const side of ['left', 'right']) {
+    for (const k of ['trans', 'rot', 'hand_pose', 'betas', 'valid']) {
+      const key = Object.keys(shapes).find((x) => x === `${side}_${k}`);
+      assert.ok(key, `npz key ${side}_${k} missing: ${Object.keys(shapes)}`);
+      assert.equal(shapes[key][0], 60, `${key}: ${shapes[key]}`);
+    }
+  }
+  const glb = await download('glb');
+  await checkGlb(glb, 60, result.fps);
+});
+
+async function checkGlb(file, T, fps) {
+  const bytes = readFileSync(file);
+  const validator = (await import('gltf-validator')).default;
+  const report = await validator.validateBytes(new Uint8Array(bytes));
+  assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  assert.equal(report.issues.numWarnings, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+  const gltf = await new Promise((res, rej) => new GLTFLoader().parse(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength), '', res, rej));
+  const names = new Set();
+  gltf.scene.traverse((o) => names.add(o.name));
+  for (const n of ['hawor_world', 'left_hand', 'right_hand', 'camera', 'camera_path']) assert.ok(names.has(n), `GLB node ${n} missing`);
+  assert.equal(gltf.cameras.length, 1);
+  assert.equal(gltf.animations.length, 1);
+  assert.ok(Math.abs(gltf.animations[0].duration - (T - 1) / fps) < 1.5 / fps, `animation of ${gltf.animations[0].duration} s`);
+  const frames = gltf.scene.getObjectByName('right_hand').children.length + gltf.scene.getObjectByName('left_hand').children.length;
+  assert.ok(frames > 0, 'no hand frames in the GLB');
+}
+
+test('MANO files dropped on the page drive the meshes (stand-in MANO files, 30 frames of the sample)', { skip }, async () => {
+  const dir = join(out, 'mano');
+  mkdirSync(dir, { recursive: true });
+  const py = spawnSync(PY, [join(root, 'tests/ref/hand_make_mano.py'), join(dir, 'ref.txt'), dir], { encoding: 'utf8' });
+  assert.equal(py.status, 0, py.stderr);
+  // Dropped together on the drop zone: the sides come from the names.
+  const files = ['MANO_LEFT.pkl', 'MANO_RIGHT.pkl'].map((n) => ({ name: n, mimeType: 'application/octet-stream', buffer: readFileSync(join(dir, n)) }));
+  const handle = await page.evaluateHandle(() => new DataTransfer());
+  for (const f of files) {
+    await page.evaluate(({ dt, name, b64 }) => dt.items.add(new File([Uint8Array.from(atob(b64), (c) => c.charCodeAt(0))], name)),
+      { dt: handle, name: f.name, b64: f.buffer.toString('base64') });
+  }
+  await page.dispatchEvent('#drop', 'drop', { dataTransfer: handle });
+  await page.waitForFunction(() => /MANO left: MANO_LEFT\.pkl, right: MANO_RIGHT\.pkl/.test(document.getElementById('models-note').textContent), null, { timeout: 20000 });
+  await page.fill('#opt-maxframes', '30');
+  await page.click('#btn-sample');
+  await waitDone(120000);
+  assert.equal(await message(), null, JSON.stringify(await page.evaluate(() => window.haworApp.result && window.haworApp.result.warnings)));
+  const s = await page.evaluate(() => window.haworApp.sceneSummary());
+  for (const side of ['left', 'right']) assert.equal(s.hands[side].vertices, 778, `${side}: ${JSON.stringify(s.hands[side])}`);
+  await page.click('#btn-clear-models');
+  await page.fill('#opt-maxframes', '');
+});
+
+test('the real clip through the file input', { skip: skip || (!existsSync(KITCHEN) && 'the clip is absent') }, async () => {
+  if (!existsSync(KITCHEN)) console.log(`# SKIP: ${KITCHEN} not found`);
+  await page.fill('#opt-maxside', '640');
+  await page.fill('#opt-maxframes', String(KITCHEN_FRAMES));
+  const t0 = Date.now();
+  await page.setInputFiles('#file-video', KITCHEN);
+  await waitDone(240000);
+  assert.equal(await message(), null, 'no message after the clip');
+  const run = await page.evaluate(() => window.haworApp.lastRun);
+  timings.kitchen = { wallMs: Date.now() - t0, ...run };
+  const r = await page.evaluate(() => { const x = window.haworApp.result; return { T: x.frameCount, w: x.width, h: x.height, fx: x.intrinsics.fx }; });
+  assert.equal(r.T, KITCHEN_FRAMES);
+  assert.deepEqual([r.w, r.h], [640, 360]);
+  await checkScene(KITCHEN_FRAMES, 'kitchen');
+  await page.evaluate(() => window.haworApp.view.setFrame(20));
+  await page.waitForTimeout(300);
+  await page.screenshot({ path: join(out, 'kitchen.png') });
+  await checkGlb(await download('glb'), KITCHEN_FRAMES, 30);
+});
+
+test('the console stayed free of errors', { skip }, () => {
+  assert.deepEqual(consoleErrors, []);
+});

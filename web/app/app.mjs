@@ -1,0 +1,427 @@
+// app.mjs — the page: inputs, the Web Worker that processes a clip, the views, the timeline and
+// the exports. The video is decoded here (the browser's <video>), frame by frame, and streamed to
+// the worker; no frame is kept. Nothing is uploaded: every file stays in this browser.
+import { InputError, LIMITS, openVideo, estimateFps, processingSize, videoFrames } from './video_source.mjs';
+import { SceneView } from './view3d.mjs';
+import { VideoOverlay } from './overlay.mjs';
+import { parseDepthConfig } from '/src/depth_model.mjs';
+
+const $ = (id) => document.getElementById(id);
+const t0 = performance.now();
+const ui = {
+  video: $('video'), progress: $('progress'), stage: $('stage'), stages: $('stages'), message: $('message'),
+  cancel: $('btn-cancel'), play: $('btn-play'), scrub: $('scrub'), frameLabel: $('frame-label'), summary: $('summary'),
+  engine: $('engine'), modelsNote: $('models-note'), focalNote: $('focal-note'),
+};
+
+const app = {
+  worker: null, ready: null, busy: false, run: null, result: null, meshes: null,
+  mano: { left: null, right: null }, depth: { onnx: null, config: null, configName: null },
+  sample: null, frame: 0, playing: false, base: 0, hasVideo: false, lastRun: null, readyMs: null, errors: [],
+};
+window.haworApp = app;
+
+const scene = new SceneView($('scene'));
+const overlay = new VideoOverlay(ui.video, $('overlay-gl'), $('overlay-2d'));
+
+// --- messages ------------------------------------------------------------------------------------
+
+function showMessage(text, kind = 'error') {
+  ui.message.hidden = false;
+  ui.message.className = `message ${kind === 'info' ? 'info' : ''}`;
+  ui.message.textContent = text;
+  if (kind !== 'info') app.errors.push(text);
+  ui.message.dataset.kind = kind;
+}
+function clearMessage() { ui.message.hidden = true; ui.message.textContent = ''; delete ui.message.dataset.kind; }
+
+const STAGE_NAMES = { decode: 'decoding frames' };
+function setStage(stage, done, total) {
+  ui.stage.textContent = total ? `${STAGE_NAMES[stage] || stage}: ${done}/${total}` : `${STAGE_NAMES[stage] || stage}…`;
+  if (total) ui.progress.value = Math.min(1, done / total);
+  const run = app.run;
+  if (!run) return;
+  let st = run.stages.get(stage);
+  const now = performance.now();
+  if (!st) {
+    // A new stage: the ones before it are over.
+    for (const prev of run.stages.values()) prev.li.className = 'done';
+    st = { first: now, last: now, li: document.createElement('li') };
+    run.stages.set(stage, st);
+    ui.stages.appendChild(st.li);
+  }
+  st.last = now;
+  st.done = done; st.total = total;
+  if (total && done >= total) st.li.className = 'done';
+  st.li.textContent = `${STAGE_NAMES[stage] || stage} ${total ? `${done}/${total}` : ''} · ${((st.last - st.first) / 1000).toFixed(1)} s`;
+}
+
+// --- the worker ----------------------------------------------------------------------------------
+
+function startWorker() {
+  app.worker = new Worker('/app/worker.mjs', { type: 'module' });
+  app.ready = new Promise((resolve, reject) => {
+    app.worker.onmessage = (ev) => onWorker(ev.data, resolve);
+    app.worker.onerror = (ev) => { ev.preventDefault(); const m = `The processing worker failed to start: ${ev.message || 'load error'}`; showMessage(m); reject(new Error(m)); };
+  });
+  app.worker.postMessage({ type: 'init' });
+  return app.ready;
+}
+
+function onWorker(m, resolveReady) {
+  const run = app.run;
+  switch (m.type) {
+    case 'ready':
+      app.readyMs = performance.now() - t0;
+      ui.engine.textContent = `ready in ${(app.readyMs / 1000).toFixed(1)} s · cross-origin isolated: ${m.info.crossOriginIsolated ? 'yes' : 'no'} · ${m.info.cores} cores`;
+      document.body.dataset.ready = '1';
+      resolveReady(m.info);
+      break;
+    case 'credit': if (run) { run.credits++; if (run.wake) { run.wake(); run.wake = null; } } break;
+    case 'progress': setStage(m.stage, m.done, m.total); break;
+    case 'frame-info': break;
+    case 'result': onResult(m.result, m.meshes); break;
+    case 'cancelled': if (run && run.cancelled) { finishRun(); showMessage('Cancelled. Pick the next clip whenever you like.', 'info'); } break;
+    case 'error':
+      if (run) finishRun();
+      showMessage(errorText(m.kind, m.message));
+      break;
+    case 'exported': onExported(m); break;
+    case 'stats': if (app.statsWaiter) { app.statsWaiter(m.stats); app.statsWaiter = null; } break;
+    default: break;
+  }
+}
+
+function errorText(kind, message) {
+  const prefix = { mano: 'Wrong MANO file', short: 'Clip too short', nohands: 'No hands found', video: 'Unsupported or corrupt video',
+    resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem' }[kind];
+  return prefix ? `${prefix}: ${message}` : message;
+}
+
+// --- processing a clip ---------------------------------------------------------------------------
+
+function setBusy(b) {
+  app.busy = b;
+  ui.cancel.disabled = !b;
+  for (const el of document.querySelectorAll('#input input, #input select, #btn-sample')) el.disabled = b;
+  document.body.dataset.busy = b ? '1' : '0';
+}
+
+function finishRun() {
+  if (app.run) {
+    app.run.finished = true; if (app.run.wake) app.run.wake(); clearTimeout(app.run.killTimer);
+    ui.stage.textContent = 'stopped'; ui.progress.value = 0;
+  }
+  app.run = null;
+  setBusy(false);
+}
+
+function number(id) { const v = Number($(id).value); return $(id).value !== '' && Number.isFinite(v) && v > 0 ? v : null; }
+
+async function processVideo(url, name, sampleMeta = null) {
+  if (app.busy) return;
+  clearMessage();
+  resetViews();
+  setBusy(true);
+  ui.stages.textContent = '';
+  const run = { name, credits: 4, wake: null, finished: false, stages: new Map(), tStart: performance.now() };
+  app.run = run;
+  try {
+    await app.ready;
+    setStage('opening video');
+    const meta = await openVideo(ui.video, url, name);
+    const est = await estimateFps(ui.video);
+    if (!est.fps) throw new InputError('short', `"${name}" is too short: ${est.presented} frame(s) decoded, at least ${LIMITS.minFrames} are needed.`);
+    const fps = sampleMeta ? sampleMeta.fps : est.fps;
+    let frameCount = Math.round(meta.duration * fps);
+    const maxFrames = number('opt-maxframes');
+    if (maxFrames) frameCount = Math.min(frameCount, Math.floor(maxFrames));
+    if (frameCount < LIMITS.minFrames) throw new InputError('short', `"${name}" has ${frameCount} frame(s) at ${fps} fps; at least ${LIMITS.minFrames} are needed.`);
+    const size = processingSize(meta.width, meta.height, number('opt-maxside') || 960);
+    app.base = est.base;
+    app.hasVideo = true;
+    const options = { modelKind: $('opt-model').value };
+    const focal = number('opt-focal'), fov = number('opt-fov');
+    if (focal) options.focalPx = focal * size.scale;
+    else if (fov) options.fovDeg = fov;
+    else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
+    for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };
+    if (app.depth.onnx) {
+      if (!app.depth.config) throw new InputError('depth', 'A depth ONNX was given without its JSON config (drop both files).');
+      options.depth = { bytes: app.depth.onnx.bytes.slice(), config: app.depth.config };
+    }
+    run.meta = { width: size.width, height: size.height, fps, frameCount, original: meta };
+    ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}`
+      + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default');
+    app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount }, options });
+    run.started = true;
+    const wait = () => new Promise((resolve) => {
+      if (run.finished || run.credits > 0) return resolve();
+      run.wake = resolve;
+    });
+    const tDecode = performance.now();
+    let n = 0;
+    for await (const f of videoFrames(ui.video, { fps, base: est.base, width: size.width, height: size.height, maxFrames: frameCount, wait })) {
+      if (run.finished) break;
+      run.credits--;
+      app.worker.postMessage({ type: 'frame', index: f.index, rgba: f.rgba.buffer }, [f.rgba.buffer]);
+      n++;
+      setStage('decode', n, frameCount);
+    }
+    run.decodeMs = performance.now() - tDecode;
+    run.decoded = n;
+    if (!run.finished) {
+      if (n < LIMITS.minFrames) {
+        app.worker.postMessage({ type: 'cancel' });
+        throw new InputError('short', `only ${n} frame(s) of "${name}" could be decoded; at least ${LIMITS.minFrames} are needed.`);
+      }
+      app.worker.postMessage({ type: 'end' });
+    }
+  } catch (e) {
+    const kind = e instanceof InputError ? e.kind : 'video';
+    if (app.run === run) {
+      if (run.started) app.worker.postMessage({ type: 'cancel' });
+      finishRun();
+      showMessage(errorText(kind, e.message));
+    }
+  }
+}
+
+function cancelRun() {
+  const run = app.run;
+  if (!run) return;
+  run.finished = true;
+  run.cancelled = true;
+  if (run.wake) run.wake();
+  setStage('cancelling');
+  if (!run.started) { finishRun(); showMessage('Cancelled.', 'info'); return; }
+  app.worker.postMessage({ type: 'cancel' });
+  // A worker stuck inside a long call is replaced.
+  run.killTimer = setTimeout(() => {
+    if (app.run !== run) return;
+    app.worker.terminate();
+    finishRun();
+    showMessage('Cancelled (the worker was restarted).', 'info');
+    startWorker();
+  }, 3000);
+}
+
+function onResult(result, meshes) {
+  const run = app.run;
+  app.result = result;
+  app.meshes = meshes;
+  if (run) {
+    app.lastRun = { name: run.name, totalMs: performance.now() - run.tStart, decodeMs: run.decodeMs, decoded: run.decoded, meta: run.meta,
+      stages: Object.fromEntries([...run.stages].map(([k, s]) => [k, { ms: s.last - s.first, done: s.done, total: s.total }])),
+      timings: result.timings || {} };
+    finishRun();
+  }
+  ui.progress.value = 1;
+  ui.stage.textContent = 'done';
+  scene.setResult(result, meshes);
+  overlay.setResult(result, meshes, scene);
+  ui.scrub.max = String(result.frameCount - 1);
+  ui.scrub.disabled = false;
+  ui.play.disabled = false;
+  for (const b of document.querySelectorAll('[data-export]')) b.disabled = false;
+  setFrame(0);
+  const sum = scene.summary();
+  const h = (s) => (sum.hands[s] ? `${sum.hands[s].frames} frames (${countFlags(result, s, 'infilled')} infilled)` : 'none');
+  ui.summary.textContent = [
+    `${result.frameCount} frames, ${result.width}×${result.height}, ${result.fps} fps; focal ${result.intrinsics.fx.toFixed(1)} px (${result.intrinsics.focalSource || '?'})`,
+    `left hand: ${h('left')} · right hand: ${h('right')} · camera path: ${sum.cameraPath} poses · SLAM points: ${sum.points}`,
+    `metric scale: ${result.scale ? `${Number(result.scale.scale).toFixed(3)} (${result.scale.method}, confidence ${Number(result.scale.confidence).toFixed(2)})` : '–'}`,
+    result.timings ? `timings: ${Object.entries(result.timings).map(([k, v]) => `${k} ${(v / 1000).toFixed(1)} s`).join(' · ')}` : '',
+    ...(result.warnings || []).map((w) => `warning: ${w}`),
+  ].filter(Boolean).join('\n');
+  if (result.noHands) showMessage(errorText('nohands', 'no hand was detected in any frame of this clip; the camera path is shown, the hands are empty.'));
+}
+
+function countFlags(result, side, key) {
+  const a = result.hands && result.hands[side] && result.hands[side][key];
+  if (!a) return 0;
+  let n = 0; for (let i = 0; i < a.length; i++) n += Number(a[i]) ? 1 : 0;
+  return n;
+}
+
+// --- views and timeline --------------------------------------------------------------------------
+
+function resetViews() {
+  pause();
+  app.result = null; app.meshes = null;
+  scene.clear(); overlay.clear();
+  ui.scrub.disabled = true; ui.play.disabled = true; ui.scrub.value = '0'; ui.frameLabel.textContent = '–';
+  for (const b of document.querySelectorAll('[data-export]')) b.disabled = true;
+  ui.summary.textContent = '';
+  ui.progress.value = 0;
+}
+
+function show() { return { kp: $('show-kp').checked, mesh: $('show-mesh').checked, mask: $('show-mask').checked }; }
+
+function setFrame(t, seekVideo = true) {
+  if (!app.result) return;
+  t = Math.max(0, Math.min(app.result.frameCount - 1, t | 0));
+  app.frame = t;
+  ui.scrub.value = String(t);
+  const inf = ['left', 'right'].filter((s) => app.meshes[s] && app.meshes[s].infilled[t]);
+  ui.frameLabel.textContent = `frame ${t + 1}/${app.result.frameCount}${inf.length ? ` · infilled: ${inf.join(', ')}` : ''}`;
+  scene.setFrame(t);
+  overlay.draw(t, show());
+  if (seekVideo && app.hasVideo && ui.video.readyState >= 1) ui.video.currentTime = app.base + (t + 0.25) / app.result.fps;
+}
+
+function play() {
+  if (!app.result || app.playing) return;
+  app.playing = true;
+  ui.play.textContent = 'Pause';
+  if (app.frame >= app.result.frameCount - 1) setFrame(0);
+  const fps = app.result.fps;
+  if (app.hasVideo) {
+    const step = (now, md) => {
+      if (!app.playing) return;
+      setFrame(Math.round((md.mediaTime - app.base) * fps), false);
+      ui.video.requestVideoFrameCallback(step);
+    };
+    ui.video.requestVideoFrameCallback(step);
+    ui.video.onended = () => pause();
+    ui.video.play().catch(() => pause());
+  } else {
+    let last = performance.now(), acc = 0;
+    const tick = (now) => {
+      if (!app.playing) return;
+      acc += (now - last) * fps / 1000; last = now;
+      if (acc >= 1) { const n = Math.floor(acc); acc -= n; if (app.frame + n >= app.result.frameCount) return pause(); setFrame(app.frame + n, false); }
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  }
+}
+function pause() {
+  if (!app.playing) return;
+  app.playing = false;
+  ui.play.textContent = 'Play';
+  if (app.hasVideo) ui.video.pause();
+}
+
+ui.play.onclick = () => (app.playing ? pause() : play());
+ui.scrub.oninput = () => { pause(); setFrame(Number(ui.scrub.value)); };
+for (const id of ['show-kp', 'show-mesh', 'show-mask']) $(id).onchange = () => overlay.draw(app.frame, show());
+
+// --- exports -------------------------------------------------------------------------------------
+
+const exportWaiters = new Map();
+function onExported(m) {
+  const blob = new Blob([m.data], { type: m.mime });
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(blob);
+  a.download = m.filename;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+  const w = exportWaiters.get(m.format);
+  if (w) { exportWaiters.delete(m.format); w(m.filename); }
+}
+for (const b of document.querySelectorAll('[data-export]')) {
+  b.onclick = () => { clearMessage(); app.worker.postMessage({ type: 'export', format: b.dataset.export }); };
+}
+
+// --- inputs --------------------------------------------------------------------------------------
+
+function modelsNote() {
+  const hands = app.mano.left || app.mano.right
+    ? `MANO ${['left', 'right'].map((s) => `${s}: ${app.mano[s] ? app.mano[s].name : 'default hand'}`).join(', ')}`
+    : 'the default (licence-free) hand';
+  const depth = app.depth.onnx ? `${app.depth.onnx.name}${app.depth.config ? ` + ${app.depth.configName}` : ' (config missing)'}` : 'none (scale from the hands)';
+  ui.modelsNote.textContent = `hands: ${hands} · depth: ${depth}`;
+}
+
+async function readFile(file) { return new Uint8Array(await file.arrayBuffer()); }
+
+async function addManoFile(file, side) {
+  const n = file.name.toLowerCase();
+  const named = /left/.test(n) ? 'left' : /right/.test(n) ? 'right' : null;
+  side = side || named;
+  if (!side) throw new InputError('mano', `"${file.name}": cannot tell the side; name it MANO_LEFT / MANO_RIGHT or use the "MANO left/right" buttons.`);
+  if (named && named !== side) throw new InputError('mano', `"${file.name}" looks like the ${named} hand but was given as the ${side} one.`);
+  if (!/\.(pkl|npz)$/.test(n)) throw new InputError('mano', `"${file.name}" is not a .pkl or .npz file.`);
+  app.mano[side] = { name: file.name, bytes: await readFile(file) };
+  modelsNote();
+}
+
+async function addDepthFile(file) {
+  if (/\.json$/i.test(file.name)) {
+    const text = await file.text();
+    try { parseDepthConfig(text); } catch (e) { throw new InputError('depth', `"${file.name}": ${e.message}`); }
+    app.depth.config = text; app.depth.configName = file.name;
+  } else {
+    app.depth.onnx = { name: file.name, bytes: await readFile(file) };
+  }
+  modelsNote();
+}
+
+async function handleFiles(files, hint = null) {
+  clearMessage();
+  let video = null;
+  try {
+    for (const f of files) {
+      const n = f.name.toLowerCase();
+      if (hint === 'mano-left' || hint === 'mano-right') await addManoFile(f, hint.slice(5));
+      else if (/\.(pkl|npz)$/.test(n)) await addManoFile(f, null);
+      else if (/\.onnx$/.test(n) || (/\.json$/.test(n) && hint === 'depth')) await addDepthFile(f);
+      else if (/\.json$/.test(n)) await loadResultFile(f);
+      else video = f;
+    }
+  } catch (e) {
+    showMessage(errorText(e.kind, e.message));
+    return;
+  }
+  if (video) {
+    if (app.videoUrl) URL.revokeObjectURL(app.videoUrl);
+    app.videoUrl = URL.createObjectURL(video);
+    await processVideo(app.videoUrl, video.name);
+  }
+}
+
+async function loadResultFile(file) {
+  resetViews();
+  app.hasVideo = false;
+  ui.video.removeAttribute('src'); ui.video.load();
+  const options = {};
+  for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };
+  app.worker.postMessage({ type: 'load-result', text: await file.text(), options });
+}
+
+$('file-video').onchange = (e) => { const f = [...e.target.files]; e.target.value = ''; handleFiles(f); };
+$('file-result').onchange = (e) => { const f = [...e.target.files]; e.target.value = ''; handleFiles(f); };
+$('file-mano-left').onchange = (e) => { const f = [...e.target.files]; e.target.value = ''; handleFiles(f, 'mano-left'); };
+$('file-mano-right').onchange = (e) => { const f = [...e.target.files]; e.target.value = ''; handleFiles(f, 'mano-right'); };
+$('file-depth').onchange = (e) => { const f = [...e.target.files]; e.target.value = ''; handleFiles(f, 'depth'); };
+$('btn-clear-models').onclick = () => { app.mano = { left: null, right: null }; app.depth = { onnx: null, config: null, configName: null }; modelsNote(); };
+$('btn-sample').onclick = async () => {
+  try {
+    if (!app.sample) {
+      const r = await fetch('/assets/sample.json');
+      if (!r.ok) throw new InputError('setup', 'the synthetic sample is not built (run scripts/build_web.sh).');
+      app.sample = await r.json();
+    }
+    await processVideo(`/assets/${app.sample.video}`, 'synthetic sample', app.sample);
+  } catch (e) { showMessage(errorText(e.kind || 'setup', e.message)); }
+};
+ui.cancel.onclick = cancelRun;
+const drop = $('drop');
+for (const ev of ['dragenter', 'dragover']) drop.addEventListener(ev, (e) => { e.preventDefault(); drop.classList.add('over'); });
+for (const ev of ['dragleave', 'drop']) drop.addEventListener(ev, (e) => { e.preventDefault(); drop.classList.remove('over'); });
+drop.addEventListener('drop', (e) => handleFiles([...e.dataTransfer.files]));
+window.addEventListener('dragover', (e) => e.preventDefault());
+window.addEventListener('drop', (e) => e.preventDefault());
+
+app.view = { scene, overlay, setFrame, play, pause };
+app.sceneSummary = () => scene.summary();
+/// Memory of the worker's WebAssembly core and JavaScript heap, and of the page's heap.
+app.stats = () => new Promise((resolve) => {
+  app.statsWaiter = (w) => resolve({ ...w, pageJsHeapBytes: performance.memory ? performance.memory.usedJSHeapSize : null });
+  app.worker.postMessage({ type: 'stats' });
+});
+app.exportFile = (format) => new Promise((resolve) => { exportWaiters.set(format, resolve); app.worker.postMessage({ type: 'export', format }); });
+startWorker().catch(() => {});

@@ -1,0 +1,238 @@
+// worker.mjs — the app's Web Worker: loads the C++ core (hawor_core.mjs), onnxruntime-web, the
+// hand networks and the hand models, receives decoded frames from the page (streamed, with
+// back-pressure), runs the shared pipeline (web/src/pipeline/run.mjs) and answers exports.
+// All files are read from this page's own origin or from what the user dropped; nothing leaves
+// the browser.
+//
+// page -> worker: {type:'init'} | {type:'start', meta, options} | {type:'frame', index, rgba}
+//   | {type:'end'} | {type:'cancel'} | {type:'load-result', text, options} | {type:'export', format}
+// worker -> page: {type:'ready', info} | {type:'credit'} | {type:'progress', stage, done, total}
+//   | {type:'frame-info', info} | {type:'result', result, meshes} | {type:'error', kind, message}
+//   | {type:'cancelled'} | {type:'exported', format, data, mime, filename}
+import createHaworCore from '/core/hawor_core.mjs';
+import * as ort from '/node_modules/onnxruntime-web/dist/ort.wasm.min.mjs';
+import { handMeshSequence } from '/src/export/hand_meshes.mjs';
+import { buildGlb } from '/src/export/gltf.mjs';
+
+const state = {
+  core: null,
+  models: {},            // 'lite' | 'full' -> { palm, landmark } bytes
+  defaultHands: null,    // { left, right } bytes
+  run: null,             // the clip being processed
+  result: null,          // the last result
+  hands: null,           // { left: {bytes, name}, right: {bytes, name} } the result's hand models
+};
+
+const post = (m, transfer) => self.postMessage(m, transfer || []);
+const fail = (kind, message) => post({ type: 'error', kind, message });
+
+async function fetchBytes(url, what) {
+  const r = await fetch(url);
+  if (!r.ok) throw Object.assign(new Error(`${what} is missing from the server (${url}: HTTP ${r.status}); run scripts/build_web.sh`), { kind: 'setup' });
+  return new Uint8Array(await r.arrayBuffer());
+}
+
+async function init() {
+  const t0 = performance.now();
+  state.core = await createHaworCore({ locateFile: (f) => `/core/${f}` });
+  ort.env.wasm.wasmPaths = '/node_modules/onnxruntime-web/dist/';
+  ort.env.logLevel = 'error';
+  const [left, right] = await Promise.all([
+    fetchBytes('/assets/hand_left.npz', 'the default left hand'),
+    fetchBytes('/assets/hand_right.npz', 'the default right hand'),
+  ]);
+  state.defaultHands = { left: { bytes: left, name: 'hand_left.npz' }, right: { bytes: right, name: 'hand_right.npz' } };
+  return { ms: performance.now() - t0, crossOriginIsolated: self.crossOriginIsolated, cores: navigator.hardwareConcurrency };
+}
+
+async function networks(kind) {
+  if (!state.models[kind]) {
+    const [palm, landmark] = await Promise.all([
+      fetchBytes(`/models/palm_detection_${kind}.onnx`, `the palm detector (${kind})`),
+      fetchBytes(`/models/hand_landmark_${kind}.onnx`, `the hand landmarker (${kind})`),
+    ]);
+    state.models[kind] = { palm, landmark };
+  }
+  return state.models[kind];
+}
+
+/// The hand models of a run: the user's MANO files where given, the default hand otherwise.
+/// Each is loaded once here so that a wrong file is reported before any frame is processed.
+function handModels(options) {
+  const out = {};
+  for (const side of ['left', 'right']) {
+    const given = options.mano && options.mano[side];
+    const m = given ? { bytes: new Uint8Array(given.bytes), name: given.name } : state.defaultHands[side];
+    let model = null;
+    try {
+      model = new state.core.HandModel(m.bytes, side, m.name);
+      if (given && !model.kind().startsWith('mano')) {
+        throw new Error(`it is a "${model.kind()}" hand model, not MANO`);
+      }
+    } catch (e) {
+      throw Object.assign(new Error(given
+        ? `The ${side} MANO file "${m.name}" cannot be used: ${e.message.replace(/^HandModel: /, '')}. Use MANO_${side.toUpperCase()}.pkl from the MANO website (or an .npz with its arrays).`
+        : `The default ${side} hand failed to load: ${e.message}`), { kind: given ? 'mano' : 'setup' });
+    } finally {
+      if (model) model.delete();
+    }
+    out[side] = m;
+  }
+  return out;
+}
+
+function meshesOf(result, hands) {
+  const T = result.frameCount;
+  const meshes = {};
+  for (const side of ['left', 'right']) {
+    const model = new state.core.HandModel(hands[side].bytes, side, hands[side].name);
+    try { meshes[side] = handMeshSequence(model, result.hands && result.hands[side], T); }
+    finally { model.delete(); }
+  }
+  return meshes;
+}
+
+function postResult(result) {
+  const meshes = meshesOf(result, state.hands);
+  const transfer = [];
+  for (const side of ['left', 'right']) transfer.push(meshes[side].vertices.buffer);
+  post({ type: 'result', result, meshes }, transfer);
+}
+
+// --- frames from the page ------------------------------------------------------------------------
+
+function frameQueue(signal) {
+  const q = { items: [], ended: false, wake: null };
+  q.push = (f) => { q.items.push(f); if (q.wake) { q.wake(); q.wake = null; } };
+  q.end = () => { q.ended = true; if (q.wake) { q.wake(); q.wake = null; } };
+  q.iterable = {
+    [Symbol.asyncIterator]() {
+      return {
+        async next() {
+          for (;;) {
+            if (signal.aborted) throw new DOMException('cancelled', 'AbortError');
+            if (q.items.length) { post({ type: 'credit' }); return { value: q.items.shift(), done: false }; }
+            if (q.ended) return { value: undefined, done: true };
+            await new Promise((r) => { q.wake = r; signal.addEventListener('abort', r, { once: true }); });
+          }
+        },
+        async return() { q.items.length = 0; return { value: undefined, done: true }; },
+      };
+    },
+  };
+  return q;
+}
+
+async function start(meta, options) {
+  if (state.run) return fail('busy', 'A clip is already being processed.');
+  const controller = new AbortController();
+  const frames = frameQueue(controller.signal);
+  state.run = { controller, frames };
+  try {
+    let run;
+    try {
+      ({ runPipeline: run } = await import('/src/pipeline/run.mjs'));
+    } catch (e) {
+      throw Object.assign(new Error(`The processing pipeline (web/src/pipeline/run.mjs) could not be loaded: ${e.message}`), { kind: 'setup' });
+    }
+    const hands = handModels(options);
+    const nets = await networks(options.modelKind || 'lite');
+    const source = { width: meta.width, height: meta.height, fps: meta.fps, frameCount: meta.frameCount ?? null, frames: frames.iterable };
+    // onnxruntime's threads: all cores but one (the page decodes the video meanwhile), at most 4;
+    // threads need cross-origin isolation (SharedArrayBuffer).
+    const threads = options.threads || (self.crossOriginIsolated ? Math.max(1, Math.min(4, (navigator.hardwareConcurrency || 2) - 1)) : 1);
+    ort.env.wasm.numThreads = threads;
+    const opts = {
+      core: state.core, ort,
+      models: { palm: nets.palm, landmark: nets.landmark },
+      handModels: { left: hands.left.bytes, right: hands.right.bytes, leftName: hands.left.name, rightName: hands.right.name },
+      modelKind: options.modelKind || 'lite',
+      threads,
+    };
+    if (options.focalPx) opts.focalPx = options.focalPx;
+    if (options.fovDeg) opts.fovDeg = options.fovDeg;
+    if (options.depth) opts.depthModel = { bytes: new Uint8Array(options.depth.bytes), config: options.depth.config };
+    const hooks = {
+      signal: controller.signal,
+      onProgress: (p) => post({ type: 'progress', stage: p.stage, done: p.done, total: p.total }),
+      onFrame: (info) => post({ type: 'frame-info', info: plain(info) }),
+    };
+    const result = await run(source, opts, hooks);
+    if (controller.signal.aborted) throw new DOMException('cancelled', 'AbortError');
+    state.result = result;
+    state.hands = hands;
+    postResult(result);
+  } catch (e) {
+    if (controller.signal.aborted || (e && e.name === 'AbortError')) post({ type: 'cancelled' });
+    else fail(e.kind || classify(e), e.message || String(e));
+  } finally {
+    state.run = null;
+  }
+}
+
+/// Error kinds for the page's message (from the pipeline's own error text).
+function classify(e) {
+  const m = String(e && e.message || e);
+  if (/too short|at least \d+ frames/i.test(m)) return 'short';
+  if (/no hand/i.test(m)) return 'nohands';
+  return e && e.name === 'HaworError' ? 'core' : 'pipeline';
+}
+
+/// Only what structured cloning carries, small: frame infos may hold typed arrays.
+function plain(info) {
+  if (!info || typeof info !== 'object') return info;
+  const o = {};
+  for (const [k, v] of Object.entries(info)) if (v == null || typeof v !== 'object' || ArrayBuffer.isView(v) && v.length <= 512) o[k] = v;
+  return o;
+}
+
+async function loadResult(text, options) {
+  let result;
+  try { result = JSON.parse(text); } catch (e) { throw Object.assign(new Error(`This file is not a hawor result.json: ${e.message}`), { kind: 'result' }); }
+  if (!result || result.version !== 1 || !(result.frameCount > 0) || !result.camera || !result.hands) {
+    throw Object.assign(new Error('This file is not a hawor result.json (version 1 with frameCount, camera and hands).'), { kind: 'result' });
+  }
+  state.hands = handModels(options);
+  state.result = result;
+  postResult(result);
+}
+
+async function exportResult(format) {
+  const r = state.result;
+  if (!r) throw Object.assign(new Error('Nothing to export yet.'), { kind: 'export' });
+  if (format === 'glb') {
+    const meshes = meshesOf(r, state.hands);
+    const cam = r.camera || {};
+    const glb = buildGlb({
+      fps: r.fps, frameCount: r.frameCount, hands: meshes, points: r.points,
+      camera: cam.positions && cam.quaternions ? { positions: cam.positions, quaternions: cam.quaternions, width: r.width, height: r.height, fx: r.intrinsics.fx, fy: r.intrinsics.fy } : null,
+    });
+    return { data: glb, mime: 'model/gltf-binary', filename: 'hawor.glb' };
+  }
+  const ex = await import('/src/pipeline/exports.mjs');
+  if (format === 'json') return { data: ex.resultToJson(r), mime: 'application/json', filename: 'result.json' };
+  if (format === 'npz') return { data: ex.resultToWorldNpz(r), mime: 'application/octet-stream', filename: 'hawor_world.npz' };
+  if (format === 'tum') return { data: ex.resultToTum(r), mime: 'text/plain', filename: 'camera.tum' };
+  throw Object.assign(new Error(`unknown export format ${format}`), { kind: 'export' });
+}
+
+self.onmessage = async (ev) => {
+  const m = ev.data;
+  try {
+    switch (m.type) {
+      case 'init': post({ type: 'ready', info: await init() }); break;
+      case 'start': start(m.meta, m.options); break;
+      case 'frame': if (state.run) state.run.frames.push({ index: m.index, rgba: new Uint8ClampedArray(m.rgba) }); break;
+      case 'end': if (state.run) state.run.frames.end(); break;
+      case 'cancel': if (state.run) state.run.controller.abort(); break;
+      case 'load-result': await loadResult(m.text, m.options || {}); break;
+      case 'stats': post({ type: 'stats', stats: {
+        coreHeapBytes: state.core && state.core.HEAPU8 ? state.core.HEAPU8.length : null,
+        jsHeapBytes: self.performance && performance.memory ? performance.memory.usedJSHeapSize : null } }); break;
+      case 'export': { const x = await exportResult(m.format); post({ type: 'exported', format: m.format, ...x }, x.data.buffer ? [x.data.buffer] : []); break; }
+      default: fail('internal', `worker: unknown message ${m.type}`);
+    }
+  } catch (e) {
+    fail(e.kind || classify(e), e.message || String(e));
+  }
+};
