@@ -19,7 +19,7 @@ import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { defaultModelsDir } from './convert_mediapipe.mjs';
 import { HandTracker } from '../src/perception/hand_tracker.mjs';
-import { assignSides } from '../src/pipeline/run.mjs';
+import { assignSides, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE } from '../src/pipeline/run.mjs';
 
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const defaultVideo = '/work/shared/data/egocentric_kitchen.mp4';
@@ -64,7 +64,7 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
   ort.env.wasm.numThreads = 1;
   ort.env.logLevel = 'error';
   const tracker = await HandTracker.create(ort, join(defaultModelsDir, `palm_detection_${model}.onnx`), join(defaultModelsDir, `hand_landmark_${model}.onnx`),
-    { maxHands: 2, detectGap: 2, ...trackerOptions }); // detectGap 2: runPipeline's default
+    { maxHands: 2, detectGap: PIPELINE_DETECT_GAP, minPresence: PIPELINE_MIN_PRESENCE, ...trackerOptions }); // runPipeline's defaults
   const prev = { left: null, right: null };
   const reach = 0.15 * Math.hypot(width, height); // as runPipeline
   const perFrame = [];

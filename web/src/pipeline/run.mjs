@@ -38,8 +38,11 @@
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
 //           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
-//           detectGap? (2)               while one hand is tracked, the palm detector looks for
-//                                        the other only every detectGap+1 frames }
+//           detectGap? (1)               while one hand is tracked, the palm detector looks for
+//                                        the other only every detectGap+1 frames
+//           minPresence? (0.3)           the landmark network's hand presence to keep a hand
+//                                        (MediaPipe's 0.5 drops the wearer's hand gripping a
+//                                        plate on the kitchen clip; tests/web/kitchen_hands) }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
@@ -87,6 +90,9 @@ export const DEFAULT_DIAGONAL_FOV_DEG = 90;
 /** Frames above this many pixels are refused (8K is 33 Mpx; the CLI downscales such videos). */
 export const MAX_PIXELS = 4096 * 2304;
 export const NUM_KP = 21;
+/** The hand tracker's defaults in the pipeline (measured with web/tools/eval_kitchen_hands.mjs). */
+export const PIPELINE_DETECT_GAP = 1;
+export const PIPELINE_MIN_PRESENCE = 0.3;
 
 function abortError() {
   const e = new Error('the pipeline was aborted');
@@ -335,14 +341,15 @@ export async function runPipeline(source, options, hooks = {}) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
       const m = options.models ?? {};
-      const detectGap = options.detectGap ?? 2;
+      const detectGap = options.detectGap ?? PIPELINE_DETECT_GAP;
+      const minPresence = options.minPresence ?? PIPELINE_MIN_PRESENCE;
       if (m.palmSession && m.landmarkSession) {
-        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap });
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence });
       }
     }
     if (options.depthModel && typeof options.depthModel.predict === 'function') {
