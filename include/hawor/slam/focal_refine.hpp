@@ -45,6 +45,7 @@ struct FocalRefineOptions {
   Scalar minChangeStds = Scalar(2);    ///< ...and above this many posterior stds
   int minPoses = 3;                    ///< free + fixed poses with observations
   int minObservations = 60;
+  int rounds = 3;                      ///< profile searches, each re-centred at the last estimate
   BAOptions<Scalar> ba;                ///< per profile evaluation
 };
 
@@ -82,10 +83,11 @@ void parabola(const Scalar x[3], const Scalar y[3], Scalar& vertex, Scalar& curv
 
 }  // namespace focal_detail
 
-/// Refines the shared focal of `P.camera` (see the header). P must have its gauge set (fixed
-/// poses / a scale prior) like any BA problem.
+namespace focal_detail {
+
+/// One profile search centred at P.camera (the prior centred at u = priorCentre relative to it).
 template <typename Scalar>
-FocalRefineResult<Scalar> refineFocal(BAProblem<Scalar>& P, const FocalRefineOptions<Scalar>& opt = {}) {
+FocalRefineResult<Scalar> refineFocalOnce(BAProblem<Scalar>& P, const FocalRefineOptions<Scalar>& opt, Scalar priorCentre) {
   using focal_detail::State;
   FocalRefineResult<Scalar> res;
   const PinholeCamera<Scalar> cam0 = P.camera;
@@ -200,7 +202,7 @@ FocalRefineResult<Scalar> refineFocal(BAProblem<Scalar>& P, const FocalRefineOpt
   res.dataStdLog = Scalar(1) / std::sqrt(dataCurv);
   const Scalar postCurv = dataCurv + Scalar(2) * priorW;
   res.stdLog = Scalar(1) / std::sqrt(postCurv);
-  const Scalar uHat = dataCurv * vertex / postCurv;  // the prior's pull toward 0
+  const Scalar uHat = (dataCurv * vertex + Scalar(2) * priorW * priorCentre) / postCurv;  // the prior's pull
   res.estimateFx = cam0.fx * std::exp(uHat);
   if (res.dataStdLog > opt.maxStdLog) {
     return keepGuess("focal not observable from this motion (std " + std::to_string(double(100 * res.dataStdLog)) +
@@ -230,6 +232,47 @@ FocalRefineResult<Scalar> refineFocal(BAProblem<Scalar>& P, const FocalRefineOpt
   res.rmsPx = rmsFin;
   res.reason = "refined by the bundle adjustment";
   return res;
+}
+
+}  // namespace focal_detail
+
+/// Refines the shared focal of `P.camera` (see the header). P must have its gauge set (fixed
+/// poses / a scale prior) like any BA problem. The profile search is repeated, re-centred at the
+/// last estimate, up to opt.rounds times while the estimate still moves by more than minChange:
+/// a map built with a wrong focal needs more BA iterations far from the guess than one profile
+/// evaluation gives it, which biases a single search toward the guess.
+template <typename Scalar>
+FocalRefineResult<Scalar> refineFocal(BAProblem<Scalar>& P, const FocalRefineOptions<Scalar>& opt = {}) {
+  const Scalar guessFx = P.camera.fx;
+  FocalRefineResult<Scalar> total;
+  std::vector<std::pair<Scalar, Scalar>> profile;
+  int evaluations = 0;
+  for (int round = 0; round < std::max(1, opt.rounds); ++round) {
+    const Scalar centre = std::log(guessFx / P.camera.fx);  // the prior's centre relative to P.camera
+    FocalRefineResult<Scalar> r = focal_detail::refineFocalOnce(P, opt, centre);
+    for (const auto& q : r.profile) profile.emplace_back(q.first * r.guessFx / guessFx, q.second);
+    evaluations += r.evaluations;
+    if (round == 0) {
+      total = r;
+    } else if (r.accepted) {
+      const bool changedBefore = total.changed;
+      const Scalar rmsGuess = total.rmsGuessPx;
+      total = r;
+      total.rmsGuessPx = rmsGuess;
+      total.changed = changedBefore || r.changed;
+      if (!r.changed) total.reason = "refined by the bundle adjustment";
+    } else {
+      break;  // keep the previous round's estimate (P is at it: a declined round restores its guess)
+    }
+    if (!r.changed) break;
+  }
+  total.guessFx = guessFx;
+  total.fx = P.camera.fx;
+  total.fy = P.camera.fy;
+  total.profile = std::move(profile);
+  total.evaluations = evaluations;
+  if (total.changed && total.fx == guessFx) total.changed = false;
+  return total;
 }
 
 }  // namespace hawor
