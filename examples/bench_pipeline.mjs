@@ -4,7 +4,7 @@
 //   node examples/bench_pipeline.mjs [--hawor build/native/examples/hawor] [--presets table_work,hands_cover,walk]
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
-//        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]]
+//        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -63,6 +63,7 @@ function parse(argv) {
     else if (a === '--work') o.work = v();
     else if (a === '--core') o.core = v();
     else if (a === '--json') o.json = v();
+    else if (a === '--mask-dilate') o.maskDilate = Number(v());
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
     else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
@@ -233,7 +234,7 @@ async function main() {
         const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
-          refineFocal: refine, handScaleSmooth: smooth,
+          refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
           ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * seq.fx)) * 180) / Math.PI } : { focalPx: seq.fx }) };
         if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
         if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);
