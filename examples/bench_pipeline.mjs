@@ -4,6 +4,7 @@
 //   node examples/bench_pipeline.mjs [--hawor build/native/examples/hawor] [--presets table_work,hands_cover,walk]
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
+//        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -19,7 +20,14 @@
 // the hand is in view and was observed, then the mean of the two hands: PA-MPJPE, W-MPJPE,
 // WA-MPJPE (mm), RTE (%), Accel (m/s²); camera: ATE and ATE-S (mm, Sim(3) / SE(3) alignment);
 // found = observed / in-view frames; swaps = observed frames whose wrist is nearer the other
-// hand's true wrist. Timing: median over sequences of each stage's ms per frame.
+// hand's true wrist. --focal-factor F: the focal guess is F × the true one (given as the diagonal
+// FOV it implies, so the pipeline treats it as a FOV guess); --refine-focal on,off: with and
+// without the SLAM's focal refinement (a second table: refined focal, its error and ATE).
+// --hand-smooth K: runPipeline's handScaleSmooth (moving average of the camera-frame wrists before
+// the hand-anchored scale). Each row also has handDepth per hand: the median ratio of the fitted
+// camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
+// fitted and the true depth (what the hand-anchored scale has to work with).
+// Timing: median over sequences of each stage's ms per frame.
 
 import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
@@ -55,6 +63,10 @@ function parse(argv) {
     else if (a === '--work') o.work = v();
     else if (a === '--core') o.core = v();
     else if (a === '--json') o.json = v();
+    else if (a === '--mask-dilate') o.maskDilate = Number(v());
+    else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
+    else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
+    else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
     else throw new Error(`unknown argument ${a}`);
   }
   return o;
@@ -172,7 +184,23 @@ export function evaluate(core, result, gt, seq, gtCam) {
     if (observed >= 3) {
       m = core.evaluateHands(gt[`${side}_joints_world`].data, clean(h.jointsWorld), gt[`${side}_joints_cam`].data, clean(h.jointsCam), T, valid, seq.fps);
     }
-    perHand[side] = { inView, observed, swaps, metrics: m };
+    // the camera-frame wrist depth against the truth (what the hand-anchored scale rests on):
+    // median ratio, its spread (median |ratio/median - 1|) and the frame-to-frame jitter of both
+    // (1.4826 MAD of second differences / sqrt(6), mm) on runs of 3 observed frames
+    const ratios = []; const d2e = []; const d2g = [];
+    const ze = (t) => h.jointsCam[63 * t + 2]; const zg = (t) => gt[`${side}_joints_cam`].data[63 * t + 2];
+    for (let t = 0; t < T; ++t) {
+      if (!valid[t]) continue;
+      ratios.push(ze(t) / zg(t));
+      if (t >= 2 && valid[t - 1] && valid[t - 2]) {
+        d2e.push(Math.abs(ze(t) - 2 * ze(t - 1) + ze(t - 2)));
+        d2g.push(Math.abs(zg(t) - 2 * zg(t - 1) + zg(t - 2)));
+      }
+    }
+    const rMed = ratios.length ? median(ratios) : NaN;
+    const depth = { ratio: rMed, spread: ratios.length ? median(ratios.map((r) => Math.abs(r / rMed - 1))) : NaN,
+      jitterMm: d2e.length ? (1e3 * 1.4826 * median(d2e)) / Math.sqrt(6) : NaN, jitterGtMm: d2g.length ? (1e3 * 1.4826 * median(d2g)) / Math.sqrt(6) : NaN };
+    perHand[side] = { inView, observed, swaps, metrics: m, depth };
   }
   return { ate: cam.ate, ate_s: cam.ate_s, simScale: cam.scale, perHand };
 }
@@ -201,12 +229,13 @@ async function main() {
       const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
       const gtCam = readTumPositions(join(seq.dir, 'camera_gt.tum'));
       const info = probeVideo(join(seq.dir, 'video.mp4'));
-      for (const mode of o.modes) {
+      for (const mode of o.modes) for (const factor of o.focalFactors ?? [null]) for (const refine of o.refineFocal ?? [true]) for (const smooth of o.handSmooth ?? [0]) {
         const timing = { decode: 0 };
         const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
-          ...(o.fov ? { fovDeg: o.fov } : { focalPx: seq.fx }) };
+          refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
+          ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * seq.fx)) * 180) / Math.PI } : { focalPx: seq.fx }) };
         if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
         if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);
         const t0 = performance.now();
@@ -216,12 +245,15 @@ async function main() {
         const T = result.frameCount;
         const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
         const row = {
-          sequence: `${preset}/${seed}`, mode, frames: T,
+          sequence: `${preset}/${seed}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
+          focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: seq.fx, focalRefined: result.intrinsics.refined,
+          focalStd: result.intrinsics.focalStd, focalEstimate: result.intrinsics.focalEstimateFx, focalReason: result.intrinsics.focalReason,
           found: `${ev.perHand.left.observed + ev.perHand.right.observed}/${ev.perHand.left.inView + ev.perHand.right.inView}`,
           swaps: ev.perHand.left.swaps + ev.perHand.right.swaps,
           pa_mpjpe: mean(hands.map((h) => h.metrics.pa_mpjpe)), w_mpjpe: mean(hands.map((h) => h.metrics.w_mpjpe)),
           wa_mpjpe: mean(hands.map((h) => h.metrics.wa_mpjpe)), rte: mean(hands.map((h) => h.metrics.rte)), accel: mean(hands.map((h) => h.metrics.accel)),
           ate: ev.ate, ate_s: ev.ate_s, scale: 1 / ev.simScale, scaleMethod: result.scale.method,
+          scaleConfidence: result.scale.confidence, handDepth: { left: ev.perHand.left.depth, right: ev.perHand.right.depth },
           msPerFrame: Object.fromEntries(Object.entries({ decode: timing.decode, ...result.timings }).filter(([k]) => k !== 'load').map(([k, v]) => [k, v / T])),
           wallMsPerFrame: (wall + timing.decode * 0) / T,
           warnings: result.warnings,
@@ -237,6 +269,13 @@ async function main() {
   console.log('| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |');
   for (const r of rows) {
     console.log(`| ${r.sequence} | ${r.mode} | ${r.found} | ${r.swaps} | ${f(r.pa_mpjpe)} | ${f(r.w_mpjpe)} | ${f(r.wa_mpjpe)} | ${f(r.rte, 2)} | ${f(r.accel, 2)} | ${f(r.ate)} | ${f(r.ate_s)} | ${f(r.scale, 3)} (${r.scaleMethod}) | ${f(r.wallMsPerFrame, 0)} |`);
+  }
+  if (o.focalFactors || o.refineFocal) {
+    console.log('\n| sequence | mode | guess/true | refine | focal out/true | error % | std % | ATE | ATE-S | α/α_true | reason |');
+    console.log('| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |');
+    for (const r of rows) {
+      console.log(`| ${r.sequence} | ${r.mode} | ${f(r.focalGuess / r.focalTrue, 3)} | ${r.refine ? 'on' : 'off'} | ${f(r.focalOut / r.focalTrue, 3)} | ${f(100 * (r.focalOut / r.focalTrue - 1), 1)} | ${r.focalStd == null ? '–' : f(100 * r.focalStd, 1)} | ${f(r.ate)} | ${f(r.ate_s)} | ${f(r.scale, 3)} | ${r.focalReason} |`);
+    }
   }
   for (const mode of o.modes) {
     const rs = rows.filter((r) => r.mode === mode);

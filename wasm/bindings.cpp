@@ -16,13 +16,15 @@
 //       the next frame's warm start; reset() forgets it (track lost); hasPrevious().
 //   renderHandMasks(width, height, intrinsics, hands: [{model, rot, handPose, betas, trans,
 //       value?}], dilatePx) -> Uint8Array(width*height)
-//   new MonoSlam(intrinsics, width, height, {useMasks?}) .process(frame: Uint8Array(W*H*c),
+//   new MonoSlam(intrinsics, width, height, {useMasks?, refineFocal?, focalPriorSigma?}) .process(frame: Uint8Array(W*H*c),
 //       c = 1 grey, 3 RGB or 4 RGBA; mask: Uint8Array(W*H), hand != 0, or null) -> status; .finish() -> {rotations (9T, row-major R_c2w),
 //       translations (3T), status: Uint8Array(T) (0 tracked, 1 interpolated, 2 lost,
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
 //       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
 //       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
-//       numResets, initialised}
+//       numResets, initialised, focal: {attempted, accepted, changed, guessFx, fx, fy (the
+//       output's), estimateFx, stdLog (posterior std of log f), dataStdLog, rmsGuessPx, rmsPx,
+//       evaluations, reason}}
 //   metricScale({rotations, translations, fps?, keyframeDepths?, depthMaps?: [Float32Array],
 //       depthWidth?, depthHeight?, masks?: [Uint8Array|null], hands?: [{positions (3T), valid}],
 //       sampling?: 'slam-depth'|'official', combine?: 'huber'|'median'})
@@ -365,6 +367,21 @@ class MonoSlam {
       o.set("numLosses", r.numLosses);
       o.set("numResets", r.numResets);
       o.set("initialised", r.initialised);
+      val fo = val::object();
+      fo.set("attempted", r.focalAttempted);
+      fo.set("accepted", r.focal.accepted);
+      fo.set("changed", r.focal.changed);
+      fo.set("guessFx", r.focal.guessFx);
+      fo.set("fx", r.camera.fx);
+      fo.set("fy", r.camera.fy);
+      fo.set("estimateFx", r.focal.estimateFx);
+      fo.set("stdLog", r.focal.stdLog);
+      fo.set("dataStdLog", r.focal.dataStdLog);
+      fo.set("rmsGuessPx", r.focal.rmsGuessPx);
+      fo.set("rmsPx", r.focal.rmsPx);
+      fo.set("evaluations", r.focal.evaluations);
+      fo.set("reason", r.focal.reason);
+      o.set("focal", fo);
       return o;
     });
   }
@@ -379,6 +396,11 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
   return guard("MonoSlam", [&] {
     hawor::SlamOptions<double> opt;
     if (!absent(options) && !absent(options["useMasks"])) opt.useMasks = options["useMasks"].as<bool>();
+    if (!absent(options) && !absent(options["refineFocal"])) opt.refineFocal = options["refineFocal"].as<bool>();
+    if (!absent(options) && !absent(options["focalPriorSigma"])) {
+      opt.focal.priorSigmaLog = options["focalPriorSigma"].as<double>();
+      if (!(opt.focal.priorSigmaLog > 0)) throw hawor::Error("focalPriorSigma must be > 0");
+    }
     return new MonoSlam(camera(intrinsics, width, height), opt);
   });
 }

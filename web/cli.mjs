@@ -2,7 +2,7 @@
 // cli.mjs: the headless hawor pipeline on a video file (node glue only: arguments, ffmpeg
 // decoding, progress, files; every algorithm is in web/src/pipeline/run.mjs and the C++ core).
 //
-//   node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--mano DIR]
+//   node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //
@@ -28,7 +28,7 @@ import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
-const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]';
+const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -48,6 +48,7 @@ export function parseArgs(argv) {
     if (a === '--out') o.out = next();
     else if (a === '--focal') o.focalPx = num(next(), '--focal', 0);
     else if (a === '--fov') { o.fovDeg = num(next(), '--fov', 1); if (o.fovDeg >= 179) throw usage('--fov must be below 179 degrees'); }
+    else if (a === '--no-refine-focal') o.refineFocal = false;
     else if (a === '--mano') o.mano = next();
     else if (a === '--depth-model') o.depthModel = next();
     else if (a === '--depth-config') o.depthConfig = next();
@@ -232,7 +233,7 @@ export async function main(argv) {
   const cpu0 = process.cpuUsage();
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
-    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
+    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
@@ -251,6 +252,7 @@ export async function main(argv) {
   const count = (a) => Array.from(a).reduce((s, v) => s + (v ? 1 : 0), 0);
   const summary = {
     out: o.out, frames: T, width, height, fps: result.fps, focal: result.intrinsics.fx, focalSource: result.intrinsics.focalSource,
+    focalRefined: result.intrinsics.refined, focalGuess: result.intrinsics.guessFx,
     noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
     scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,
     msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),

@@ -319,6 +319,31 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
     { core, focalPx: seq.fx, handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right },
       observations: simulatedObservations(gt, seq, 60, 2, 5, 7) });
     const es = evaluate(core, sim, gt, seq, gtCam);
+    // the focal: a right guess is kept (intrinsics say why); a guess 0.75 x the truth (as a FOV)
+    // is refined by the SLAM toward the truth, and the camera is no worse than without refinement
+    assert.equal(sim.intrinsics.fx, seq.fx, JSON.stringify(sim.intrinsics));
+    assert.equal(sim.intrinsics.refined, false);
+    assert.equal(sim.intrinsics.guessSource, 'user-focal');
+    assert.ok(typeof sim.intrinsics.focalReason === 'string' && sim.intrinsics.focalReason.length > 0);
+    // (60 frames give this sequence only 2 keyframes at that focal: too few, declined; 90 frames)
+    const seq90 = makeSequence(haworBin, 'table_work', 3, 90, '640x480', join(dir, 'seq90'));
+    const gt90 = core.readNpz(new Uint8Array(readFileSync(join(seq90.dir, 'hands_gt.npz'))), 'hands_gt.npz');
+    const gtCam90 = readTumPositions(join(seq90.dir, 'camera_gt.tum'));
+    const fov = (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (0.75 * seq90.fx)) * 180) / Math.PI;
+    const focalRun = (refineFocal) => runPipeline({ width: info.width, height: info.height, fps: 30, frameCount: 90,
+      frames: decodeFrames(join(seq90.dir, 'video.mp4'), info.width, info.height, null, 0, { decode: 0 }) },
+    { core, fovDeg: fov, refineFocal, handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)) },
+      observations: simulatedObservations(gt90, seq90, 90, 2, 5, 7) });
+    const wrong = await focalRun(false);
+    const refined = await focalRun(true);
+    assert.equal(wrong.intrinsics.refined, false); assert.equal(wrong.intrinsics.focalReason, 'off');
+    assert.ok(Math.abs(wrong.intrinsics.fx / seq90.fx - 0.75) < 1e-9);
+    const ki = refined.intrinsics;
+    assert.ok(ki.refined && ki.focalSource === 'slam' && ki.guessSource === 'user-fov' && ki.focalStd > 0 && ki.focalStd < 0.05, JSON.stringify(ki));
+    assert.ok(Math.abs(ki.fx / seq90.fx - 1) < 0.5 * 0.25, `refined focal ${ki.fx} vs true ${seq90.fx}`);
+    assert.equal(ki.fy, ki.fx);
+    const ew = evaluate(core, wrong, gt90, seq90, gtCam90); const er = evaluate(core, refined, gt90, seq90, gtCam90);
+    assert.ok(er.ate <= 1.1 * ew.ate, `ATE ${er.ate} mm refined vs ${ew.ate} mm with the wrong focal`);
     for (const s of ['left', 'right']) {
       assert.ok(es.perHand[s].metrics.pa_mpjpe < 6, `simulated ${s} PA-MPJPE ${es.perHand[s].metrics.pa_mpjpe}`);
       assert.ok(es.perHand[s].metrics.wa_mpjpe < 80, `simulated ${s} WA-MPJPE ${es.perHand[s].metrics.wa_mpjpe}`);

@@ -66,6 +66,7 @@
 #include "hawor/render/image.hpp"
 #include "hawor/slam/bundle_adjustment.hpp"
 #include "hawor/slam/corners.hpp"
+#include "hawor/slam/focal_refine.hpp"
 #include "hawor/slam/hand_mask.hpp"
 #include "hawor/slam/image_pyramid.hpp"
 #include "hawor/slam/klt.hpp"
@@ -131,6 +132,12 @@ struct SlamOptions {
   int globalIterations = 25;
   bool globalBundleAdjustment = true;
   bool refineFrames = true;         ///< finish(): re-estimate every frame against the final map
+  /// finish(): self-calibrate the shared focal (fx, fy by one factor, principal point fixed) in
+  /// the global bundle adjustment (focal_refine.hpp: profile of the BA cost over log f, a prior
+  /// toward the given focal, declined when the motion does not determine it); the per-frame
+  /// refinement then uses the refined focal. Off by default (the tracking used the given focal).
+  bool refineFocal = false;
+  FocalRefineOptions<Scalar> focal;
   /// Optional diagnostics sink (one line per event: initialisation attempts, losses, resets).
   std::function<void(const std::string&)> log;
 
@@ -163,6 +170,9 @@ struct SlamResult {
   int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
   int numResets = 0;                  ///< map re-initialisations
   bool initialised = false;           ///< a map was ever built (false: rotation-only output)
+  PinholeCamera<Scalar> camera;       ///< the intrinsics of the output (refined when focal.changed)
+  bool focalAttempted = false;        ///< SlamOptions::refineFocal ran (false: off, or no map)
+  FocalRefineResult<Scalar> focal;    ///< its outcome (reason says why declined / not applied)
   int count(SlamStatus s) const {
     int n = 0;
     for (SlamStatus t : status) n += t == s ? 1 : 0;
@@ -248,7 +258,7 @@ class MonoSlam {
     if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
       std::vector<int> all(keyframes_.size());
       for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
-      adjust(all, opt_.globalIterations, true);
+      adjust(all, opt_.globalIterations, true, opt_.refineFocal);
       for (std::size_t k = 0; k < keyframes_.size(); ++k) frames_[static_cast<std::size_t>(keyframes_[k].frame)].T = keyframes_[k].T;
     }
     if (opt_.refineFrames && !points_.empty()) refineAllFrames();
@@ -294,6 +304,14 @@ class MonoSlam {
     res.numLosses = losses_;
     res.numResets = resets_;
     res.initialised = everInitialised_;
+    res.camera = cam_;
+    res.focalAttempted = focalAttempted_;
+    res.focal = focal_;
+    if (!focalAttempted_) {
+      res.focal.guessFx = res.focal.fx = cam_.fx;
+      res.focal.fy = cam_.fy;
+      res.focal.reason = opt_.refineFocal ? "no map for the global bundle adjustment" : "off";
+    }
     return res;
   }
 
@@ -900,7 +918,7 @@ class MonoSlam {
   /// Bundle adjustment of the keyframes `window` (free) and their points; keyframes outside the
   /// window that see those points are fixed. Gauge: the first keyframe of each segment is fixed
   /// and its first baseline held by a scale prior when no other fixed keyframe anchors the scale.
-  void adjust(const std::vector<int>& window, int iterations, bool global) {
+  void adjust(const std::vector<int>& window, int iterations, bool global, bool withFocal = false) {
     if (window.empty()) return;
     std::vector<int> kfVar(keyframes_.size(), -1), ptVar(points_.size(), -1);
     BAProblem<Scalar> P;
@@ -988,7 +1006,24 @@ class MonoSlam {
     bo.sigmaPx = Scalar(1);
     bo.robustScale = Scalar(2);
     bo.functionTolerance = Scalar(1e-5);
-    bundleAdjust(P, bo);
+    if (withFocal) {
+      FocalRefineOptions<Scalar> fo = opt_.focal;
+      fo.ba = bo;
+      focal_ = refineFocal(P, fo);
+      focalAttempted_ = true;
+      if (focal_.changed) {
+        cam_ = P.camera;
+        opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
+      }
+      if (opt_.log) {
+        opt_.log("focal: " + std::string(focal_.changed ? "refined " : "kept ") + std::to_string(double(cam_.fx)) +
+                 " px (guess " + std::to_string(double(focal_.guessFx)) + ", std " +
+                 std::to_string(double(100 * focal_.stdLog)) + " %, " + std::to_string(focal_.evaluations) +
+                 " BAs): " + focal_.reason);
+      }
+    } else {
+      bundleAdjust(P, bo);
+    }
     for (std::size_t v = 0; v < kfOf.size(); ++v) {
       if (!P.poseFixed[v]) keyframes_[static_cast<std::size_t>(kfOf[v])].T = P.poses[v];
     }
@@ -1127,6 +1162,8 @@ class MonoSlam {
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
   Scalar lastMedianDepth_ = Scalar(0);
+  bool focalAttempted_ = false;
+  FocalRefineResult<Scalar> focal_;
   SE3T predicted_;
   bool havePrediction_ = false;
   bool turning_ = false;

@@ -20,6 +20,18 @@
 //                                                                  format check only
 //           focalPx?, fovDeg?            focal length in pixels, or a diagonal field of view;
 //                                        default: DEFAULT_DIAGONAL_FOV_DEG on the diagonal
+//           refineFocal? (true)          let the SLAM's final bundle adjustment refine the focal
+//                                        (a profile over log f with a prior toward the given or
+//                                        default focal; declined when the motion does not
+//                                        determine it); when refined, the hands are re-fitted
+//           focalPriorSigma? (0.3)       the prior's std of log f (user focal: 0.1 by default)
+//           focalMaxPasses? (4)          SLAM passes at most (see focalRerunBytes)
+//           focalRerunBytes? (256 MB)    the SLAM's grey frames and masks are kept up to this
+//                                        size; when the focal was refined and they were kept, the
+//                                        SLAM runs a second pass with the refined focal (its
+//                                        tracking and map then use it, not only its final BA)
+//           handScaleSmooth? (0)         experiment: centred moving average (half-width, frames)
+//                                        of the camera-frame wrists before the hand-anchored scale
 //           modelKind: 'lite' | 'full'   recorded in the result (the caller picks the bytes)
 //           depthModel?: { bytes, config }   a metric-depth ONNX + its JSON config (the slot of
 //                                        web/src/depth_model.mjs), run on the SLAM keyframes,
@@ -52,8 +64,13 @@
 // in the JSON; NaN becomes null in the JSON):
 // { version: 1, width, height, fps, frameCount,
 //   modelKind, threads,
-//   intrinsics: { fx, fy, cx, cy, focalSource: 'user-focal' | 'user-fov' | 'default-fov',
-//                 fovDeg (diagonal), refined: false },
+//   intrinsics: { fx, fy, cx, cy (the ones used for the output: refined when refined is true),
+//                 focalSource: 'user-focal' | 'user-fov' | 'default-fov' | 'slam' (refined),
+//                 guessSource (the source of the starting focal), guessFx, fovDeg (diagonal, of
+//                 fx), refined: bool, focalStd (relative posterior std, null when not
+//                 estimated), focalEstimateFx (the SLAM's estimate even when not applied, null
+//                 when none), focalReason (why refined / kept / declined), focalPasses (2: the
+//                 SLAM ran again with the refined focal) },
 //   slam: { width, height, numKeyframes, numLosses, numResets, initialised },
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
@@ -267,6 +284,22 @@ class HandTrackStore {
   }
 }
 
+/** Centred moving average (half-width k) of a (T,3) track within each run of valid frames. */
+function smoothTrack(positions, valid, T, k) {
+  const src = Float64Array.from(positions);
+  for (let t = 0; t < T; ++t) {
+    if (!valid[t]) continue;
+    let lo = t; while (lo > t - k && lo > 0 && valid[lo - 1]) lo -= 1;
+    let hi = t; while (hi < t + k && hi < T - 1 && valid[hi + 1]) hi += 1;
+    const h = Math.min(t - lo, hi - t); // symmetric window (no lag)
+    for (let a = 0; a < 3; ++a) {
+      let sum = 0;
+      for (let u = t - h; u <= t + h; ++u) sum += src[3 * u + a];
+      positions[3 * t + a] = sum / (2 * h + 1);
+    }
+  }
+}
+
 function modelName(bytes, given, side) {
   if (given) return given;
   // the core recognises the format from the content; a name helps MANO/glTF side detection only
@@ -361,7 +394,11 @@ export async function runPipeline(source, options, hooks = {}) {
     }
     addTime('load', now() - t0);
 
-    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true });
+    const refineFocal = options.refineFocal ?? true;
+    const focalPriorSigma = options.focalPriorSigma ?? (intr.focalSource === 'user-focal' ? 0.1 : 0.3);
+    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true, refineFocal, focalPriorSigma });
+    const rerunBytes = options.focalRerunBytes ?? 256 * 1024 * 1024;
+    let keptSlam = refineFocal && rerunBytes > 0 ? { frames: [], masks: [], bytes: 0 } : null;
     owned.push(slam);
     const grey = new Uint8Array(ss.width * ss.height);
     const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
@@ -418,11 +455,11 @@ export async function runPipeline(source, options, hooks = {}) {
         // a fit behind the camera or absurdly far is not a hand
         const ok = fit && fit.trans[2] > 0.03 && fit.trans[2] < 5 && Number.isFinite(fit.reprojRmsPx);
         if (!ok) {
-          stores[side].push({ kp2 });
+          stores[side].push({ kp2, kp3 });
           info.hands.push({ side, valid: false, keypoints2d: kp2 });
           continue;
         }
-        stores[side].push({ kp2, fit });
+        stores[side].push({ kp2, kp3, fit });
         maskHands.push({ model: models[side], rot: fit.rot, handPose: fit.handPose, betas: fit.betas, trans: fit.trans, value: 255 });
         info.hands.push({ side, valid: true, keypoints2d: kp2 });
       }
@@ -437,6 +474,16 @@ export async function runPipeline(source, options, hooks = {}) {
       // at the frame's own size the core converts to grey itself
       const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
       if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : downscaleRgb(rgba, width, height, c, ss.width, ss.height));
+      if (keptSlam) {
+        if (keptSlam.bytes + 2 * ss.width * ss.height > rerunBytes) {
+          keptSlam = null; // too long a video for a second SLAM pass: the focal is refined in the final BA only
+        } else {
+          const g = slamFrame === rgba ? downscaleGrey(rgba, width, height, c, ss.width, ss.height) : grey.slice();
+          keptSlam.frames.push(g);
+          keptSlam.masks.push(mask);
+          keptSlam.bytes += g.length + (mask ? mask.length : 0);
+        }
+      }
       addTime('slamPrep', now() - t1);
       t1 = now();
       info.slamStatus = slam.process(slamFrame, mask);
@@ -453,11 +500,69 @@ export async function runPipeline(source, options, hooks = {}) {
     // --- SLAM finish ---
     let t1 = now();
     if (onProgress) onProgress({ stage: 'slam-finish', done: 0, total: 1 });
-    const traj = slam.finish();
+    let traj = slam.finish();
     addTime('slamFinish', now() - t1);
+    const fr1 = traj.focal;
+    let focalPasses = 1;
+    const maxPasses = options.focalMaxPasses ?? 4;
+    // Further passes with the refined focal while it still moves: a map built with a wrong focal
+    // (its triangulations and culled observations) biases each pass's estimate toward its start.
+    let last = fr1;
+    t1 = now();
+    while (last && last.changed && keptSlam && keptSlam.frames.length === T && focalPasses < maxPasses) {
+      checkAbort(signal);
+      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma });
+      owned.push(slam2);
+      for (let t = 0; t < T; ++t) slam2.process(keptSlam.frames[t], keptSlam.masks[t]);
+      const traj2 = slam2.finish();
+      if (!traj2.initialised && traj.initialised) break; // keep the previous pass
+      traj = traj2;
+      focalPasses += 1;
+      last = traj2.focal;
+    }
+    if (focalPasses > 1) {
+      addTime('slamRerun', now() - t1);
+      const f = traj.focal;
+      // the output's focal is the last pass's; refined relative to the user's guess
+      traj.focal = { ...f, changed: true, accepted: true, stdLog: f.accepted ? f.stdLog : fr1.stdLog,
+        estimateFx: f.estimateFx > 0 ? f.estimateFx : f.fx, reason: `${fr1.reason} (${focalPasses} SLAM passes)` };
+    }
+    keptSlam = null;
     if (!traj.initialised) {
       warnings.push(T < 2 ? 'a single frame: no camera motion can be estimated (identity pose)'
         : 'the SLAM did not initialise (too little camera translation or texture): the camera is held at the first pose');
+    }
+    // --- focal: the SLAM's refinement (the hands are re-fitted with it) ---
+    const fr = traj.focal;
+    const intrOut = { ...intr, guessSource: intr.focalSource, guessFx: intr.fx, refined: false, focalPasses,
+      focalStd: fr && fr.accepted && Number.isFinite(fr.stdLog) ? fr.stdLog : null,
+      focalEstimateFx: fr && fr.estimateFx > 0 ? fr.estimateFx / sx : null,
+      focalReason: !refineFocal ? 'off' : (fr ? fr.reason : 'not run') };
+    if (fr && fr.changed) {
+      intrOut.fx = fr.fx / sx;
+      intrOut.fy = fr.fy / sy;
+      intrOut.refined = true;
+      intrOut.focalSource = 'slam';
+      intrOut.fovDeg = (2 * Math.atan(0.5 * Math.hypot(width, height) / intrOut.fx) * 180) / Math.PI;
+      t1 = now();
+      const K2 = [intrOut.fx, intrOut.fy, intr.cx, intr.cy];
+      for (const side of ['left', 'right']) {
+        fitters[side].reset();
+        let prevOk = false;
+        for (const f of stores[side].frames) {
+          if (!f) { if (prevOk) fitters[side].reset(); prevOk = false; continue; }
+          let fit = null;
+          try {
+            fit = fitters[side].fit(f.kp2, null, f.kp3, null, K2, width, height);
+          } catch (e) {
+            fitters[side].reset();
+          }
+          const ok = fit && fit.trans[2] > 0.03 && fit.trans[2] < 5 && Number.isFinite(fit.reprojRmsPx);
+          if (ok) f.fit = fit; else { delete f.fit; fitters[side].reset(); }
+          prevOk = !!ok;
+        }
+      }
+      addTime('refit', now() - t1);
     }
     const nLost = Array.from(traj.status).filter((s) => s === 2).length;
     if (nLost > 0) warnings.push(`the camera was lost on ${nLost} of ${T} frames (their poses are interpolated or held)`);
@@ -507,12 +612,14 @@ export async function runPipeline(source, options, hooks = {}) {
     // --- metric scale ---
     t1 = now();
     if (onProgress) onProgress({ stage: 'scale', done: 0, total: 1 });
+    const handScaleSmooth = options.handScaleSmooth ?? 0;
     const wristTracks = [];
     for (const side of ['left', 'right']) {
       if (!present[side]) continue;
       const positions = new Float64Array(3 * T);
       const jc = hands[side].jointsCam;
       for (let t = 0; t < T; ++t) positions.set(hands[side].valid[t] ? jc.subarray(63 * t, 63 * t + 3) : [0, 0, 1], 3 * t);
+      if (handScaleSmooth > 0) smoothTrack(positions, hands[side].valid, T, handScaleSmooth);
       wristTracks.push({ positions, valid: hands[side].valid });
     }
     let scale = { scale: NaN, method: 'none', confidence: 0 };
@@ -610,7 +717,7 @@ export async function runPipeline(source, options, hooks = {}) {
       version: RESULT_VERSION,
       width, height, fps, frameCount: T, modelKind: options.observations ? 'observations' : (options.modelKind ?? 'lite'),
       threads: options.threads ?? 1,
-      intrinsics: { fx: intr.fx, fy: intr.fy, cx: intr.cx, cy: intr.cy, focalSource: intr.focalSource, fovDeg: intr.fovDeg, refined: false },
+      intrinsics: intrOut,
       slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
         numResets: traj.numResets, initialised: traj.initialised },
       camera: { positions, quaternions, status: traj.status, timestamps },
