@@ -148,6 +148,10 @@ async function start(meta, options) {
       handModels: { left: hands.left.bytes, right: hands.right.bytes, leftName: hands.left.name, rightName: hands.right.name },
       modelKind: options.modelKind || 'lite',
       threads,
+      // The SLAM's grey frames and masks kept for the focal re-runs: 64 MB in the page (≈ 100
+      // frames at 640×480) instead of the pipeline's 256 MB, so that a long clip stays within the
+      // page's memory budget; longer clips refine the focal in the final bundle adjustment only.
+      focalRerunBytes: 64 * 1024 * 1024,
     };
     if (options.focalPx) opts.focalPx = options.focalPx;
     if (options.fovDeg) opts.fovDeg = options.fovDeg;
