@@ -43,30 +43,37 @@ run_suite() {
   echo "=== [$name] done in $((SECONDS - t0)) s" >&2
 }
 
+# tally_node NAME LOG RC: adds node's TAP summary ("# pass N" / "# fail N") in LOG to the totals;
+# a missing summary, or a non-zero exit without failures (a crash after the tests), is a failure.
+tally_node() {
+  local name=$1 log=$2 rc=$3 pass fail
+  pass=$(grep -E '^# pass [0-9]+$' "$log" | tail -1 | awk '{print $3}')
+  fail=$(grep -E '^# fail [0-9]+$' "$log" | tail -1 | awk '{print $3}')
+  if [[ -z "$pass" || -z "$fail" ]]; then
+    echo "[$name] no test summary" >&2; total_fail=$((total_fail + 1)); status=1; return
+  fi
+  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
+  if ((fail == 0 && rc != 0)); then
+    echo "[$name] node --test exited $rc" >&2; total_fail=$((total_fail + 1))
+  fi
+  ((fail == 0 && rc == 0)) || status=1
+}
+
 # run_node_suite: the JavaScript tests (tests/web, node's own runner, onnxruntime-web's wasm
-# build) against the native binary and the WebAssembly core (hawor_core.mjs) just built;
-# tallies node's "# pass N" / "# fail N". The
+# build) against the native binary and the WebAssembly core (hawor_core.mjs) just built. The
 # files are listed by the shell (node 18 and 20 also take the folder, node 22 only patterns);
 # no flag is needed on node 18 or 20 (onnxruntime-web reads its .wasm from disk in node).
 run_node_suite() {
   echo "=== [node] node --test tests/web" >&2
+  local t0=$SECONDS
   if [[ ! -f node_modules/onnxruntime-web/package.json ]]; then
     echo "[node] node_modules/onnxruntime-web missing: run scripts/install.sh" >&2
     total_fail=$((total_fail + 1)); status=1; return
   fi
-  HAWOR_BIN="$root/build/native/examples/hawor" HAWOR_CORE="$root/build/wasm/wasm/hawor_core.mjs" node --test --test-reporter=tap tests/web/*.test.mjs \
-    2>&1 | tee "$log_dir/node-test.log"
-  local rc=${PIPESTATUS[0]} pass fail
-  pass=$(grep -E '^# pass [0-9]+$' "$log_dir/node-test.log" | tail -1 | awk '{print $3}')
-  fail=$(grep -E '^# fail [0-9]+$' "$log_dir/node-test.log" | tail -1 | awk '{print $3}')
-  if [[ -z "$pass" || -z "$fail" ]]; then
-    echo "[node] no test summary" >&2; total_fail=$((total_fail + 1)); status=1; return
-  fi
-  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
-  if ((fail == 0 && rc != 0)); then
-    echo "[node] node --test exited $rc" >&2; total_fail=$((total_fail + 1))
-  fi
-  ((fail == 0 && rc == 0)) || status=1
+  HAWOR_BIN="$root/build/native/examples/hawor" HAWOR_CORE="$root/build/wasm/wasm/hawor_core.mjs" \
+    node --test --test-reporter=tap tests/web/*.test.mjs 2>&1 | tee "$log_dir/node-test.log"
+  tally_node node "$log_dir/node-test.log" "${PIPESTATUS[0]}"
+  echo "=== [node] done in $((SECONDS - t0)) s" >&2
 }
 
 # run_browser_suite: the browser app end to end in headless Chromium (tests/browser), after the
@@ -80,17 +87,7 @@ run_browser_suite() {
     total_fail=$((total_fail + 1)); status=1; return
   fi
   node --test --test-reporter=tap tests/browser/*.test.mjs 2>&1 | tee "$log_dir/browser-test.log"
-  local rc=${PIPESTATUS[0]} pass fail
-  pass=$(grep -E '^# pass [0-9]+$' "$log_dir/browser-test.log" | tail -1 | awk '{print $3}')
-  fail=$(grep -E '^# fail [0-9]+$' "$log_dir/browser-test.log" | tail -1 | awk '{print $3}')
-  if [[ -z "$pass" || -z "$fail" ]]; then
-    echo "[browser] no test summary" >&2; total_fail=$((total_fail + 1)); status=1; return
-  fi
-  total_pass=$((total_pass + pass)); total_fail=$((total_fail + fail))
-  if ((fail == 0 && rc != 0)); then
-    echo "[browser] node --test exited $rc" >&2; total_fail=$((total_fail + 1))
-  fi
-  ((fail == 0 && rc == 0)) || status=1
+  tally_node browser "$log_dir/browser-test.log" "${PIPESTATUS[0]}"
   echo "=== [browser] done in $((SECONDS - t0)) s" >&2
 }
 
