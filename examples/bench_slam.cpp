@@ -5,7 +5,11 @@
 // so the masked/unmasked comparison sees identical images and machine load.
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
-//              [--json FILE]
+//              [--json FILE] [--dump PREFIX] [--log]
+//   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
+//                  estimated camera positions (estimate as output, not aligned), status, keyframe
+//   --masked-only  skip the unmasked runs (quicker iterations)
+//   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -55,7 +59,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> presets = hawor::synth::synthPresetNames();
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
-  std::string model = "default", jsonPath;
+  std::string model = "default", jsonPath, dumpPrefix;
+  bool log = false, maskedOnly = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -81,8 +86,14 @@ int main(int argc, char** argv) {
       model = next();
     } else if (a == "--json") {
       jsonPath = next();
+    } else if (a == "--dump") {
+      dumpPrefix = next();
+    } else if (a == "--masked-only") {
+      maskedOnly = true;
+    } else if (a == "--log") {
+      log = true;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log]\n");
       return 2;
     }
   }
@@ -118,6 +129,7 @@ int main(int argc, char** argv) {
       hawor::PinholeCamera<double> cam = seq.camera();
       hawor::SlamOptions<double> om, ou;
       ou.useMasks = false;
+      if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;
       hawor::synth::SynthFrame<double> fr;
@@ -132,14 +144,14 @@ int main(int argc, char** argv) {
         auto t0 = std::chrono::steady_clock::now();
         masked.process(fr.images.rgb, &fr.images.mask);
         auto t1 = std::chrono::steady_clock::now();
-        plain.process(fr.images.rgb, &fr.images.mask);
+        if (!maskedOnly) plain.process(fr.images.rgb, &fr.images.mask);
         auto t2 = std::chrono::steady_clock::now();
         tm.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
         tu.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
       }
       double path = 0;
       for (std::size_t i = 1; i < gt.size(); ++i) path += (gt[i] - gt[i - 1]).norm();
-      for (int m = 0; m < 2; ++m) {
+      for (int m = 0; m < (maskedOnly ? 1 : 2); ++m) {
         hawor::MonoSlam<double>& s = m == 0 ? masked : plain;
         const double bytes = double(s.sequenceBytes());
         auto t0 = std::chrono::steady_clock::now();
@@ -147,11 +159,30 @@ int main(int argc, char** argv) {
         auto t1 = std::chrono::steady_clock::now();
         std::vector<hawor::Vec3<double>> est;
         for (const auto& T : r.poses) est.push_back(T.translation());
+        if (!dumpPrefix.empty()) {
+          std::ofstream d(dumpPrefix + "_" + name + "_" + (m == 0 ? "masked" : "unmasked") + ".csv");
+          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe\n";
+          for (std::size_t i = 0; i < est.size(); ++i) {
+            d << i << ',' << gt[i](0) << ',' << gt[i](1) << ',' << gt[i](2) << ',' << est[i](0) << ',' << est[i](1) << ','
+              << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << '\n';
+          }
+        }
         RunStats st;
         st.preset = name;
         st.mode = m == 0 ? "masked" : "unmasked";
         st.frames = n;
-        st.ateM = hawor::ateSim3(hawor::cameraPositions(gt), hawor::cameraPositions(est)) / 1000.0;
+        try {
+          st.ateM = hawor::ateSim3(hawor::cameraPositions(gt), hawor::cameraPositions(est)) / 1000.0;
+        } catch (const hawor::Error&) {
+          // Every estimated position equal (rotation-only output, pure_rotation): the limit of the
+          // Sim(3) alignment as its scale goes to 0 puts them all at the ground-truth centroid.
+          hawor::Vec3<double> c = hawor::Vec3<double>::Zero();
+          for (const auto& g : gt) c += g;
+          c /= double(gt.size());
+          double e = 0;
+          for (const auto& g : gt) e += (g - c).norm();
+          st.ateM = e / double(gt.size());
+        }
         st.pathM = path;
         st.atePct = path > 0 ? 100.0 * st.ateM / path : 0;
         st.msMedian = hawor::percentile(m == 0 ? tm : tu, 0.5);
