@@ -1,4 +1,4 @@
-// npy.mjs: NumPy .npy files, C order: float32 written (format 1.0); float32/64, int32/64,
+// npy.mjs: NumPy .npy files, C order: float64/32, int32, uint8 and bool written (format 1.0); float32/64, int32/64,
 // uint8 and bool read (formats 1.0 to 3.0).
 //
 // Layout (numpy's format spec): the magic "\x93NUMPY", a major and a minor version byte, the
@@ -12,15 +12,22 @@ function littleEndian() {
   return new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
 }
 
-/** A .npy file holding `data` (Float32Array) as float32 little-endian with the given shape. */
-export function encodeNpyFloat32(data, shape) {
-  if (!(data instanceof Float32Array)) throw new Error('npy: data must be a Float32Array');
+const DTYPES = new Map([
+  [Float64Array, '<f8'], [Float32Array, '<f4'], [Int32Array, '<i4'], [Uint8Array, '|u1'],
+]);
+
+/** A .npy file (format 1.0, C order) holding the typed array `data` (Float64Array '<f8',
+ *  Float32Array '<f4', Int32Array '<i4', Uint8Array '|u1') with the given shape; bool: true
+ *  stores a Uint8Array as '|b1'. */
+export function encodeNpy(data, shape, { bool = false } = {}) {
+  const descr = bool && data instanceof Uint8Array ? '|b1' : DTYPES.get(data?.constructor);
+  if (!descr) throw new Error(`npy: unsupported array type ${data?.constructor?.name}`);
   if (!Array.isArray(shape) || shape.some((d) => !Number.isSafeInteger(d) || d < 0)) throw new Error('npy: shape must be non-negative integers');
   const count = shape.reduce((a, b) => a * b, 1);
   if (count !== data.length) throw new Error(`npy: ${data.length} values for shape (${shape.join(', ')})`);
   if (!littleEndian()) throw new Error('npy: big-endian platform');
   const shapeText = shape.length === 1 ? `(${shape[0]},)` : `(${shape.join(', ')})`;
-  let header = `{'descr': '<f4', 'fortran_order': False, 'shape': ${shapeText}, }`;
+  let header = `{'descr': '${descr}', 'fortran_order': False, 'shape': ${shapeText}, }`;
   const fixed = MAGIC.length + 2 + 2; // magic, version, header length
   const total = Math.ceil((fixed + header.length + 1) / 64) * 64;
   header = header.padEnd(total - fixed - 1, ' ') + '\n';
@@ -34,6 +41,12 @@ export function encodeNpyFloat32(data, shape) {
   for (let i = 0; i < header.length; ++i) out[fixed + i] = header.charCodeAt(i);
   out.set(new Uint8Array(data.buffer, data.byteOffset, data.byteLength), total);
   return out;
+}
+
+/** A .npy file holding `data` (Float32Array) as float32 little-endian with the given shape. */
+export function encodeNpyFloat32(data, shape) {
+  if (!(data instanceof Float32Array)) throw new Error('npy: data must be a Float32Array');
+  return encodeNpy(data, shape);
 }
 
 /** Parses a .npy file: returns {shape, data}, C order, data a Float32Array ('<f4'),

@@ -7,7 +7,7 @@
 // its local header); then the end-of-central-directory record (0x06054b50). Integers are
 // little-endian. No ZIP64: every offset and size must stay below 4 GiB (checked).
 
-import { encodeNpyFloat32 } from './npy.mjs';
+import { encodeNpy, encodeNpyFloat32 } from './npy.mjs';
 
 let crcTable = null;
 
@@ -65,6 +65,13 @@ export function encodeStoredZip(files) {
   u32(0x06054b50); u16(0); u16(0); u16(entries.length); u16(entries.length);
   u32(centralBytes); u32(centralStart); u16(0);
   return out;
+}
+
+/** An .npz of typed arrays: `arrays` is [[name, {shape, data, bool?}], ...] or a Map (dtypes as
+ *  encodeNpy in npy.mjs). */
+export function encodeNpz(arrays) {
+  const list = arrays instanceof Map ? [...arrays.entries()] : arrays;
+  return encodeStoredZip(list.map(([name, a]) => ({ name: `${name}.npy`, bytes: encodeNpy(a.data, a.shape, { bool: !!a.bool }) })));
 }
 
 /** An .npz of float32 arrays: `arrays` is [[name, {shape, data: Float32Array}], ...] or a Map. */

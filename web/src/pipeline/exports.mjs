@@ -15,34 +15,7 @@
 //       arrays as plain arrays, NaN / Infinity as null.
 // The .npz files are stored (uncompressed) ZIPs of .npy members, as np.savez writes them.
 
-import { encodeStoredZip } from '../../tools/npz.mjs';
-
-const DTYPES = new Map([
-  [Float64Array, '<f8'], [Float32Array, '<f4'], [Int32Array, '<i4'], [Uint8Array, '|u1'],
-]);
-
-/** One .npy (format 1.0, C order) of a typed array; bool: true stores a Uint8Array as '|b1'. */
-export function encodeNpy(data, shape, { bool = false } = {}) {
-  const descr = bool ? '|b1' : DTYPES.get(data.constructor);
-  if (!descr) throw new Error(`npy: unsupported array type ${data.constructor.name}`);
-  const count = shape.reduce((a, b) => a * b, 1);
-  if (count !== data.length) throw new Error(`npy: ${data.length} values for shape (${shape.join(', ')})`);
-  const shapeText = shape.length === 1 ? `(${shape[0]},)` : `(${shape.join(', ')})`;
-  let header = `{'descr': '${descr}', 'fortran_order': False, 'shape': ${shapeText}, }`;
-  const fixed = 10;
-  const total = Math.ceil((fixed + header.length + 1) / 64) * 64;
-  header = header.padEnd(total - fixed - 1, ' ') + '\n';
-  const out = new Uint8Array(total + data.byteLength);
-  out.set([0x93, 0x4e, 0x55, 0x4d, 0x50, 0x59, 1, 0, header.length & 0xff, header.length >> 8], 0);
-  for (let i = 0; i < header.length; ++i) out[fixed + i] = header.charCodeAt(i);
-  out.set(new Uint8Array(data.buffer, data.byteOffset, data.byteLength), total);
-  return out;
-}
-
-/** An .npz of [[name, {data, shape, bool?}], ...]. */
-export function encodeNpz(list) {
-  return encodeStoredZip(list.map(([name, a]) => ({ name: `${name}.npy`, bytes: encodeNpy(a.data, a.shape, { bool: !!a.bool }) })));
-}
+import { encodeNpz } from '../../tools/npz.mjs';
 
 const f64 = (a) => (a instanceof Float64Array ? a : Float64Array.from(a ?? []));
 const u8 = (a) => Uint8Array.from(a ?? [], (v) => (v ? 1 : 0));
