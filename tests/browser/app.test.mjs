@@ -68,6 +68,14 @@ async function message() {
 async function waitDone(timeout) {
   await page.waitForFunction(() => document.body.dataset.busy === '0' && (window.haworApp.result || !document.getElementById('message').hidden), null, { timeout });
 }
+// The models note is updated once the page has read the dropped file (asynchronously): wait for
+// it to match, then assert it (a read right after setInputFiles raced with that update).
+async function modelsNote(re, timeout = 10000) {
+  await page.waitForFunction(([src, flags]) => new RegExp(src, flags).test(document.getElementById('models-note').textContent),
+    [re.source, re.flags], { timeout }).catch(() => {});
+  assert.match(await page.textContent('#models-note'), re);
+}
+
 async function expectError(kindText, timeout = 30000) {
   await page.waitForFunction(() => !document.getElementById('message').hidden && document.body.dataset.busy !== '1', null, { timeout });
   const m = await message();
@@ -126,14 +134,14 @@ test('bad inputs give clear messages and the app stays usable', { skip }, async 
   // A wrong MANO file: refused before any frame is processed.
   writeFileSync(join(dir, 'MANO_RIGHT.pkl'), Buffer.from('this is not a pickle'));
   await page.setInputFiles('#file-mano-right', join(dir, 'MANO_RIGHT.pkl'));
-  assert.match(await page.textContent('#models-note'), /MANO_RIGHT\.pkl/);
+  await modelsNote(/MANO_RIGHT\.pkl/);
   await page.click('#btn-sample');
   assert.match(await expectError('Wrong MANO file', 60000), /right MANO file "MANO_RIGHT\.pkl"/);
   // A MANO file given for the wrong side.
   await page.setInputFiles('#file-mano-left', join(dir, 'MANO_RIGHT.pkl'));
   await expectError('Wrong MANO file');
   await page.click('#btn-clear-models');
-  assert.match(await page.textContent('#models-note'), /default/);
+  await modelsNote(/default/);
   await page.screenshot({ path: join(out, 'error-message.png') });
 });
 
