@@ -90,10 +90,11 @@ export function probeVideo(video) {
 }
 
 /** Frames from one ffmpeg process as RGB24, one preallocated buffer per frame (backpressure:
- *  the pipe is read only as fast as the pipeline consumes frames). */
+ *  the pipe is read only as fast as the pipeline consumes frames). scaleTo: {width, height,
+ *  flags?} resizes with ffmpeg's scale filter (flags default 'area'). */
 export async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
   const args = ['-v', 'error', '-nostdin', '-i', video, '-an', '-sn'];
-  if (scaleTo) args.push('-vf', `scale=${scaleTo.width}:${scaleTo.height}:flags=area`);
+  if (scaleTo) args.push('-vf', `scale=${scaleTo.width}:${scaleTo.height}:flags=${scaleTo.flags ?? 'area'}`);
   if (maxFrames) args.push('-frames:v', String(maxFrames));
   args.push('-f', 'rawvideo', '-pix_fmt', 'rgb24', '-');
   const ff = spawn('ffmpeg', args, { stdio: ['ignore', 'pipe', 'pipe'] });

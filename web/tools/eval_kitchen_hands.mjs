@@ -13,50 +13,24 @@
 //                 with the left wrist right of the right one (the hands do not cross in this clip)
 // 'partial' labels count neither way. Prints one JSON summary (with ms per frame).
 
-import { spawn, spawnSync } from 'node:child_process';
 import { readFileSync } from 'node:fs';
 import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { defaultModelsDir } from './convert_mediapipe.mjs';
 import { HandTracker } from '../src/perception/hand_tracker.mjs';
+import { probeVideo, decodeFrames } from '../cli.mjs';
 import { assignSides, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE } from '../src/pipeline/run.mjs';
 
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const defaultVideo = '/work/shared/data/egocentric_kitchen.mp4';
 export const defaultLabels = join(root, 'tests', 'data', 'kitchen_hands_visible.json');
 
-function probe(video) {
-  const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries', 'stream=width,height', '-of', 'csv=p=0', video], { encoding: 'utf8' });
-  const [w, h] = r.stdout.trim().split(',').map(Number);
-  if (r.status !== 0 || !(w > 0 && h > 0)) throw new Error(`${video}: not a readable video`);
-  return [w, h];
-}
-
-async function* frames(video, width, height, scaled) {
-  const args = ['-v', 'error', '-i', video];
-  if (scaled) args.push('-vf', `scale=${width}:${height}`);
-  const ff = spawn('ffmpeg', [...args, '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-'], { stdio: ['ignore', 'pipe', 'inherit'] });
-  const size = width * height * 3;
-  let buf = Buffer.alloc(0);
-  try {
-    for await (const chunk of ff.stdout) {
-      buf = buf.length ? Buffer.concat([buf, chunk]) : chunk;
-      while (buf.length >= size) {
-        yield new Uint8Array(buf.buffer, buf.byteOffset, size).slice();
-        buf = buf.subarray(size);
-      }
-    }
-  } finally {
-    if (ff.exitCode === null) ff.kill();
-  }
-}
-
 /**
  * Runs the tracker + side assignment over the clip; returns { perFrame: [{left, right}] (wrist
  * [x, y] in full-resolution pixels or null), msPerFrame, stats, width, height }.
  */
 export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'lite', trackerOptions = {} } = {}) {
-  const [W, H] = probe(video);
+  const { width: W, height: H } = probeVideo(video);
   const s = maxSide > 0 ? Math.min(1, maxSide / Math.max(W, H)) : 1;
   const width = Math.round(W * s / 2) * 2;
   const height = Math.round(H * s / 2) * 2;
@@ -69,7 +43,9 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
   const reach = 0.15 * Math.hypot(width, height); // as runPipeline
   const perFrame = [];
   let ms = 0;
-  for await (const data of frames(video, width, height, s !== 1)) {
+  // ffmpeg's default scaling (bicubic), as the labelled figures were measured
+  const scaleTo = s !== 1 ? { width, height, flags: 'bicubic' } : null;
+  for await (const { rgba: data } of decodeFrames(video, width, height, scaleTo, 0, { decode: 0 })) {
     const t0 = performance.now();
     const dets = await tracker.track({ width, height, data, channels: 3 });
     ms += performance.now() - t0;
