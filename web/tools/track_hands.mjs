@@ -4,19 +4,19 @@
 //   node web/tools/track_hands.mjs --video IN.mp4 --out hands.jsonl
 //        [--model lite|full] [--first N] [--count N] [--max-hands 2] [--threads 1] [--mirrored]
 //
-// Frames are decoded by ffmpeg (Debian's; `ffmpeg -f rawvideo -pix_fmt rgb24`, one process for
-// the whole run). Each output line:
+// Frames are decoded by ffmpeg (Debian's; web/cli.mjs's decodeFrames, RGB24 at full resolution,
+// one process for the whole run, stopping after frame first + count). Each output line:
 //   {"frame": i, "hands": [{"handedness": "left"|"right", "handednessScore", "presence",
 //     "source": "track"|"detect", "landmarks": [[x, y, z] x 21] image pixels,
 //     "world": [[x, y, z] x 21] metres, "roi": {cx, cy, w, h, rotation}}]}
 // A summary JSON line goes to stderr (frames, hands per frame, detector runs, ms per frame).
 // Exit code 2: usage error; 1: a missing or bad file (the message names it).
 
-import { spawn, spawnSync } from 'node:child_process';
 import { createWriteStream, existsSync } from 'node:fs';
 import { join } from 'node:path';
 import { defaultModelsDir } from './convert_mediapipe.mjs';
 import { HandTracker } from '../src/perception/hand_tracker.mjs';
+import { probeVideo, decodeFrames } from '../cli.mjs';
 
 function usage(msg) {
   const e = new Error(`${msg}\nusage: node web/tools/track_hands.mjs --video IN.mp4 --out hands.jsonl [--model lite|full] [--first N] [--count N] [--max-hands N] [--threads N] [--mirrored]`);
@@ -51,37 +51,6 @@ function parse(argv) {
 
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
 
-function probe(video) {
-  const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries', 'stream=width,height', '-of', 'csv=p=0', video], { encoding: 'utf8' });
-  if (r.error) throw fail('ffprobe is not installed (apt-get install ffmpeg)');
-  const [w, h] = r.stdout.trim().split(',').map(Number);
-  if (r.status !== 0 || !(w > 0 && h > 0)) throw fail(`${video}: not a readable video (${r.stderr.trim().split('\n').pop() ?? ''})`);
-  return [w, h];
-}
-
-/** Yields {index, rgb} for every frame, from one ffmpeg process. */
-async function* frames(video, width, height) {
-  const ff = spawn('ffmpeg', ['-v', 'error', '-i', video, '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-'], { stdio: ['ignore', 'pipe', 'pipe'] });
-  let err = '';
-  ff.stderr.on('data', (d) => { err += d; });
-  const size = width * height * 3;
-  let buf = Buffer.alloc(0);
-  let index = 0;
-  try {
-    for await (const chunk of ff.stdout) {
-      buf = buf.length ? Buffer.concat([buf, chunk]) : chunk;
-      while (buf.length >= size) {
-        yield { index: index++, rgb: new Uint8Array(buf.buffer, buf.byteOffset, size).slice() };
-        buf = buf.subarray(size);
-      }
-    }
-  } finally {
-    if (ff.exitCode === null) ff.kill();
-  }
-  const code = ff.exitCode ?? await new Promise((res) => ff.on('close', res));
-  if (code !== 0 && err) throw fail(`ffmpeg: ${err.trim().split('\n').pop()}`);
-}
-
 const round = (v, d) => Number(v.toFixed(d));
 const triples = (a, d) => Array.from({ length: a.length / 3 }, (_, k) => [round(a[3 * k], d), round(a[3 * k + 1], d), round(a[3 * k + 2], d)]);
 
@@ -91,7 +60,7 @@ async function main(argv) {
   const palm = join(o.models, `palm_detection_${o.model}.onnx`);
   const lm = join(o.models, `hand_landmark_${o.model}.onnx`);
   for (const f of [palm, lm]) if (!existsSync(f)) throw fail(`${f}: missing (scripts/install.sh converts the models)`);
-  const [width, height] = probe(o.video);
+  const { width, height } = probeVideo(o.video);
   const ort = await import('onnxruntime-web');
   ort.env.wasm.numThreads = o.threads;
   ort.env.logLevel = 'error';
@@ -99,11 +68,12 @@ async function main(argv) {
   const out = createWriteStream(o.out);
   const perFrame = [];
   const hist = new Array(o.maxHands + 1).fill(0);
-  for await (const f of frames(o.video, width, height)) {
+  // full resolution; ffmpeg stops after the last frame asked for (0: the whole clip)
+  const maxFrames = Number.isFinite(o.count) ? o.first + o.count : 0;
+  for await (const f of decodeFrames(o.video, width, height, null, maxFrames, { decode: 0 })) {
     if (f.index < o.first) continue;
-    if (f.index >= o.first + o.count) break;
     const t0 = performance.now();
-    const hands = await tracker.track({ width, height, data: f.rgb, channels: 3 });
+    const hands = await tracker.track({ width, height, data: f.rgba, channels: 3 });
     perFrame.push(performance.now() - t0);
     hist[hands.length] += 1;
     const rec = {
