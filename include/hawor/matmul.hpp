@@ -499,6 +499,16 @@ __attribute__((target("avx512f,avx512bf16"))) inline void amxPackA(const float* 
     }                                                                                    \
   } while (0)
 
+/// One k step's products into the 32×32 block of C (tiles 0–3): the two row tiles of A in tiles
+/// 4–5 times the two panels of B in 6–7, whichever bf16 part (hi or lo) those tiles hold now.
+/// (Fixed tile numbers: GCC's asm intrinsics need literals, so no parameters.)
+__attribute__((always_inline)) inline void amxProducts2x2() {
+  _tile_dpbf16ps(0, 4, 6);
+  _tile_dpbf16ps(1, 4, 7);
+  _tile_dpbf16ps(2, 5, 6);
+  _tile_dpbf16ps(3, 5, 7);
+}
+
 /// C(n×m) = A·B (+ bias): bf16x3 (Split) or plain bf16 products, fp32 accumulation in tiles.
 /// Tiles 0–3 hold a 32×32 block of C (2 row tiles × 2 panels), 4–5 two row tiles of A (hi, then
 /// lo), 6–7 two panels of B (lo, then hi): per k step 6 tile loads for 12 products in the order
@@ -545,24 +555,15 @@ void matmulAmxKernel(const float* A, Eigen::Index lda, Eigen::Index n, const Amx
         if (Split) {
           _tile_loadd(6, b + 512, 64);
           _tile_loadd(7, b + 1536, 64);
-          _tile_dpbf16ps(0, 4, 6);
-          _tile_dpbf16ps(1, 4, 7);
-          _tile_dpbf16ps(2, 5, 6);
-          _tile_dpbf16ps(3, 5, 7);
+          amxProducts2x2();  // A_hi·B_lo
         }
         _tile_loadd(6, b, 64);
         _tile_loadd(7, b + 1024, 64);
-        _tile_dpbf16ps(0, 4, 6);
-        _tile_dpbf16ps(1, 4, 7);
-        _tile_dpbf16ps(2, 5, 6);
-        _tile_dpbf16ps(3, 5, 7);
+        amxProducts2x2();  // A_hi·B_hi (plain bf16: the only one)
         if (Split) {
           _tile_loadd(4, a0 + 512, 64);
           _tile_loadd(5, a1 + 512, 64);
-          _tile_dpbf16ps(0, 4, 6);
-          _tile_dpbf16ps(1, 4, 7);
-          _tile_dpbf16ps(2, 5, 6);
-          _tile_dpbf16ps(3, 5, 7);
+          amxProducts2x2();  // A_lo·B_hi
         }
       }
       const Eigen::Index r0 = 2 * u * 16, j0 = 2 * q * 16;
