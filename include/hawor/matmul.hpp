@@ -40,7 +40,9 @@
 #include <type_traits>
 #include <vector>
 
-#if defined(__AMX_TILE__) && defined(__AMX_BF16__) && defined(__x86_64__) && defined(__linux__)
+// GCC names the AMX feature macros __AMX_TILE__ / __AMX_BF16__, clang 14 __AMXTILE__ / __AMXBF16__.
+#if (defined(__AMX_TILE__) || defined(__AMXTILE__)) && (defined(__AMX_BF16__) || defined(__AMXBF16__)) && \
+    defined(__x86_64__) && defined(__linux__)
 #define HAWOR_HAS_AMX 1
 #include <cpuid.h>
 #include <immintrin.h>
