@@ -1,14 +1,15 @@
-// hawor/scale/fuse_scale.hpp — one metric scale from the depth-based (robust_scale.hpp) and the
-// hand-anchored (hand_scale.hpp) estimates (issue 5, item 3): the depth scale when only it
-// exists, the hand scale when only it exists, and with both the confidence-weighted mean in log
-// space, log α = (c_d·log α_d + c_h·log α_h) / (c_d + c_h) (scales multiply, so they average in
-// log space).
+// hawor/scale/fuse_scale.hpp — one metric scale from several estimates (issue 5, item 3): the
+// depth-based (robust_scale.hpp), the hand-anchored (hand_scale.hpp), the ground-plane
+// (ground_scale.hpp) one. A single estimate is the answer; several give the confidence-weighted
+// mean in log space, log α = Σ c_k·log α_k / Σ c_k (scales multiply, so they average in log
+// space), with the largest confidence.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "hawor/common.hpp"
 #include "hawor/scale/robust_scale.hpp"
@@ -28,28 +29,53 @@ template <typename Scalar>
 struct FusedScale {
   Scalar scale = std::numeric_limits<Scalar>::quiet_NaN();
   Scalar confidence = Scalar(0);
-  std::string method;  ///< "depth", "hands" or "fused"
+  std::string method;  ///< the cue's name ("depth", "hands", "ground") or "fused"
   bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
 };
 
-/// Fuses the two estimates (file comment); a NaN or non-positive scale counts as absent. Not ok()
-/// when neither exists.
+/// One estimate for fuseScaleCues: a NaN or non-positive scale, or a zero confidence with other
+/// cues present, counts as absent.
+template <typename Scalar>
+struct ScaleCue {
+  Scalar scale, confidence;
+  std::string name;
+};
+
+/// Fuses the estimates (file comment). Not ok() when none exists.
+template <typename Scalar>
+FusedScale<Scalar> fuseScaleCues(const std::vector<ScaleCue<Scalar>>& cues) {
+  FusedScale<Scalar> out;
+  std::vector<const ScaleCue<Scalar>*> have;
+  for (const auto& c : cues) {
+    if (std::isfinite(double(c.scale)) && c.scale > Scalar(0)) have.push_back(&c);
+  }
+  if (have.empty()) return out;
+  if (have.size() > 1) {  // several: only those with a confidence take part
+    std::vector<const ScaleCue<Scalar>*> weighted;
+    for (const auto* c : have) {
+      if (c->confidence > Scalar(0)) weighted.push_back(c);
+    }
+    if (!weighted.empty()) have = weighted;
+    else have.resize(1);
+  }
+  if (have.size() == 1) {
+    out.scale = have[0]->scale, out.confidence = std::max(Scalar(0), have[0]->confidence), out.method = have[0]->name;
+    return out;
+  }
+  Scalar sw = 0, sl = 0;
+  for (const auto* c : have) {
+    sw += c->confidence, sl += c->confidence * std::log(c->scale);
+    out.confidence = std::max(out.confidence, c->confidence);
+  }
+  out.scale = std::exp(sl / sw);
+  out.method = "fused";
+  return out;
+}
+
+/// The depth and hand estimates (fuseScaleCues with those two).
 template <typename Scalar>
 FusedScale<Scalar> fuseScales(Scalar depthScale, Scalar depthConfidence, Scalar handScale, Scalar handConfidence) {
-  FusedScale<Scalar> out;
-  const bool d = std::isfinite(double(depthScale)) && depthScale > Scalar(0);
-  const bool h = std::isfinite(double(handScale)) && handScale > Scalar(0);
-  const Scalar cd = std::max(Scalar(0), depthConfidence), ch = std::max(Scalar(0), handConfidence);
-  if (d && h && cd + ch > Scalar(0)) {
-    out.scale = std::exp((cd * std::log(depthScale) + ch * std::log(handScale)) / (cd + ch));
-    out.confidence = std::max(cd, ch);
-    out.method = "fused";
-  } else if (d) {
-    out.scale = depthScale, out.confidence = cd, out.method = "depth";
-  } else if (h) {
-    out.scale = handScale, out.confidence = ch, out.method = "hands";
-  }
-  return out;
+  return fuseScaleCues<Scalar>({{depthScale, depthConfidence, "depth"}, {handScale, handConfidence, "hands"}});
 }
 
 }  // namespace hawor

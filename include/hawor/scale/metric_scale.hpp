@@ -4,8 +4,12 @@
 //               pixels (nearest pixel: u, v rounded; pixels outside the map dropped), hand pixels
 //               flagged from the keyframes' masks, then AdaSM over keyframes (robust_scale.hpp);
 //   hand cue    the hand-anchored scale from camera-frame metric hand positions (hand_scale.hpp);
-//   fusion      confidence-weighted in log space (fuse_scale.hpp).
-// Either cue may be absent. Defaults are those of `hawor scale`: SLAM-depth sampling with 30
+//   ground cue  the cameras' height above the floor plane of the SLAM map (ground_scale.hpp);
+//   fusion      the two cues that need no depth network (hands, ground) first: a floor reading
+//               that could be a table top (ambiguous) takes whichever reading is nearer the hands'
+//               scale, then both are averaged in log space weighted by confidence; that result
+//               and the depth cue are fused the same way (fuse_scale.hpp).
+// Any cue may be absent. Defaults are those of `hawor scale`: SLAM-depth sampling with 30
 // points per window, Huber combination over keyframes, hold windows of half a second.
 // Thread-safety: pure functions.
 #pragma once
@@ -20,6 +24,7 @@
 #include "hawor/common.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/scale/fuse_scale.hpp"
+#include "hawor/scale/ground_scale.hpp"
 #include "hawor/scale/hand_scale.hpp"
 #include "hawor/scale/robust_scale.hpp"
 
@@ -29,6 +34,7 @@ template <typename Scalar>
 struct MetricScaleOptions {
   AdaptiveScaleOptions<Scalar> depth;
   HandScaleOptions<Scalar> hands;
+  GroundScaleOptions<Scalar> ground;
   MetricScaleOptions() {
     // Sparse SLAM depths: the official D-window truncates the noise (robust_scale.hpp), and a
     // window of 10 points is too noisy.
@@ -76,20 +82,25 @@ KeyframeDepthPairs<Scalar> pairKeyframeDepths(const Scalar* uv, const Scalar* sl
 template <typename Scalar>
 struct MetricScaleResult {
   FusedScale<Scalar> fused;         ///< the answer (not ok() when neither cue gave a scale)
-  bool depthRan = false, handsRan = false;
+  bool depthRan = false, handsRan = false, groundRan = false;
   SequenceScale<Scalar> depth;      ///< the depth cue (when it ran)
   Scalar depthConfidence = Scalar(0);
   HandScaleResult<Scalar> hands;    ///< the hand cue (when it ran)
+  GroundScaleResult<Scalar> ground; ///< the ground cue (when it ran)
+  Scalar groundUsed = std::numeric_limits<Scalar>::quiet_NaN();  ///< the ground reading fused
+  FusedScale<Scalar> noDepth;       ///< hands and ground combined (the cues without a depth network)
 };
 
 /// The metric scale (file comment). `keyframes` may be empty (no depth maps); `hands` may be
-/// empty (no hand cue; otherwise one track per hand, each as long as T_w_c). Throws for
-/// mismatched lengths or invalid options; an absent answer is fused.ok() == false.
+/// empty (no hand cue; otherwise one track per hand, each as long as T_w_c); `mapPoints` (world
+/// frame, map units) null or empty for no ground cue. Throws for mismatched lengths or invalid
+/// options; an absent answer is fused.ok() == false.
 template <typename Scalar>
 MetricScaleResult<Scalar> estimateMetricScale(const std::vector<KeyframeDepthPairs<Scalar>>& keyframes,
                                               const std::vector<SE3<Scalar>>& T_w_c,
                                               const std::vector<HandTrack<Scalar>>& hands,
-                                              const MetricScaleOptions<Scalar>& opt = {}) {
+                                              const MetricScaleOptions<Scalar>& opt = {},
+                                              const std::vector<Vec3<Scalar>>* mapPoints = nullptr) {
   MetricScaleResult<Scalar> r;
   Scalar ds = std::numeric_limits<Scalar>::quiet_NaN(), hs = ds, hc = Scalar(0);
   if (!keyframes.empty()) {
@@ -113,7 +124,18 @@ MetricScaleResult<Scalar> estimateMetricScale(const std::vector<KeyframeDepthPai
     r.handsRan = true;
     if (r.hands.ok()) hs = r.hands.scale, hc = r.hands.confidence;
   }
-  r.fused = fuseScales(ds, r.depthConfidence, hs, hc);
+  Scalar gs = std::numeric_limits<Scalar>::quiet_NaN(), gc = Scalar(0);
+  if (mapPoints && !mapPoints->empty()) {
+    r.ground = groundPlaneScale(*mapPoints, T_w_c, opt.ground);
+    r.groundRan = true;
+    if (r.ground.ok()) {
+      gs = groundReadingNear(r.ground, hs);  // floor or table top: the one nearer the hands
+      gc = r.ground.confidence;
+      r.groundUsed = gs;
+    }
+  }
+  r.noDepth = fuseScaleCues<Scalar>({{hs, hc, "hands"}, {gs, gc, "ground"}});
+  r.fused = fuseScaleCues<Scalar>({{ds, r.depthConfidence, "depth"}, {r.noDepth.scale, r.noDepth.confidence, r.noDepth.method}});
   return r;
 }
 
