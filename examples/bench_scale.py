@@ -10,6 +10,12 @@ repeated for --repeats independent draws of the corruption:
                 with SLAM-depth sampling and the Huber estimate over keyframes (the default), the
                 same with the median over keyframes, the official sampling and median, and the
                 plain median ("w/o AdaSM" in the paper).
+  ground        no depth and no hands: `hawor scale --intrinsics` — the keyframe depths back-
+                projected to map points, the cameras' median height above the lowest horizontal
+                level (the floor) against the 1.6 m eye-height prior (scale/ground_scale.hpp);
+                deterministic, one run per preset. The presets' eyes are 1.55-1.7 m high.
+  no-depth      hands and ground together (`--hands --intrinsics`), as the pipeline runs without
+                a depth network.
   hand-anchored no depth at all: `hawor scale --hands` on the ground-truth camera-frame wrists
                 with a fitted hand's errors: 2 mm white noise across the image, 1.5 % of the
                 depth white noise along it plus a slowly varying depth error (1 cm, Gaussian-
@@ -99,9 +105,10 @@ def main(argv):
     a = ap.parse_args(argv)
     rng = np.random.default_rng(a.seed)
     results = []
-    print("%-13s %7s %8s | %-43s | %-26s" % ("preset", "path[m]", "ATE[m]",
+    print("%-13s %7s %8s | %-43s | %-26s | %-27s | %s" % ("preset", "path[m]", "ATE[m]",
                                               "depth: scale err % AdaSM/kf-median/official/median, ATE-S/ATE",
-                                              "hands: err %, cue, conf"))
+                                              "hands: err %, cue, conf", "ground: err %, conf, table m",
+                                              "no-depth: err %"))
     for preset in a.presets.split(","):
         seq = os.path.join(a.work, "%s_s1_640x480_0" % preset)
         traj = os.path.join(seq, "slam_masked.tum")
@@ -125,7 +132,18 @@ def main(argv):
             entry["skipped"] = "SLAM failed (ATE %.1f %% of the path): no single trajectory scale" % (100 * ate["mean"] / path)
             print("%-13s %7.2f %8.4f | %s" % (preset, path, ate["mean"], entry["skipped"]))
             continue
-        fps = float(open(os.path.join(seq, "intrinsics.txt")).read().split()[6])
+        intr = open(os.path.join(seq, "intrinsics.txt")).read().split()
+        fps = float(intr[6])
+        kflag = ["--intrinsics", ",".join(intr[:4])]
+        outp = os.path.join(seq, "metric_ground.tum")
+        try:
+            j = json.loads(run([a.hawor, "scale", "--traj", traj, "--keyframe-depths", kd, "--out", outp] + kflag))
+            entry["ground"] = abs(j["scale"] / true_scale - 1)
+            entry["ground_conf"] = j["confidence"]
+            entry["ground_surface_m"] = j.get("ground_surface_m", float("nan"))
+            entry["ground_ambiguous"] = j.get("ground_ambiguous", False)
+        except RuntimeError as e:
+            entry["ground_error"] = str(e).splitlines()[0]
         frames = np.load(kd)["frames"]
         hands_gt = np.load(os.path.join(seq, "hands_gt.npz"))
         draws = []
@@ -156,20 +174,30 @@ def main(argv):
                 d["hand_conf"] = j["confidence"]
             except RuntimeError as e:
                 d["hands_error"] = str(e).splitlines()[0]
+            try:
+                j = json.loads(run([a.hawor, "scale", "--traj", traj, "--keyframe-depths", kd, "--out", outp,
+                                    "--hands", hp] + kflag))
+                d["no_depth"] = abs(j["scale"] / true_scale - 1)
+            except RuntimeError as e:
+                d["no_depth_error"] = str(e).splitlines()[0]
             draws.append(d)
         entry["draws"] = draws
 
         def med(key):
             v = [d[key] for d in draws if key in d]
             return float(np.median(v)) if v else float("nan")
-        for k in ("depth", "kf_median", "official", "median", "ate_s_ratio", "hands", "hand_conf"):
+        for k in ("depth", "kf_median", "official", "median", "ate_s_ratio", "hands", "hand_conf", "no_depth"):
             entry[k] = med(k)
         cues = sorted(set(d.get("hand_cue", "error") for d in draws))
         entry["hand_cues"] = cues
-        print("%-13s %7.2f %8.4f | %6.2f / %6.2f / %6.2f / %6.2f   %5.2f        | %6.2f  %-10s %4.2f" %
+        ground = ("%6.2f  %4.2f  %5.2f%s" % (100 * entry["ground"], entry["ground_conf"], entry["ground_surface_m"],
+                                              " ambiguous" if entry["ground_ambiguous"] else "")
+                  if "ground" in entry else "- (%s)" % entry.get("ground_error", "")[:40])
+        print("%-13s %7.2f %8.4f | %6.2f / %6.2f / %6.2f / %6.2f   %5.2f        | %6.2f  %-10s %4.2f | %-27s | %6.2f" %
               (preset, path, ate["mean"], 100 * entry["depth"], 100 * entry["kf_median"], 100 * entry["official"],
                100 * entry["median"],
-               entry["ate_s_ratio"], 100 * entry["hands"], ",".join(cues), entry["hand_conf"]))
+               entry["ate_s_ratio"], 100 * entry["hands"], ",".join(cues), entry["hand_conf"], ground,
+               100 * entry["no_depth"]))
     dep = [e for e in results if "depth" in e and np.isfinite(e["depth"])]
     if dep:
         print("depth-based over %s: median scale error %.2f %% (AdaSM, SLAM-depth sampling, Huber over keyframes) "
@@ -183,6 +211,11 @@ def main(argv):
     if hands:
         print("hand-anchored over %s (>= 0.5 m of camera path): median scale error %.2f %%"
               % (",".join(e["preset"] for e in hands), 100 * np.median([e["hands"] for e in hands])))
+    ground = [e for e in results if "ground" in e and e["path_m"] >= 0.5]
+    if ground:
+        print("ground-plane over %s (>= 0.5 m of camera path): median scale error %.2f %%; hands and ground fused: %.2f %%"
+              % (",".join(e["preset"] for e in ground), 100 * np.median([e["ground"] for e in ground]),
+                 100 * np.median([e["no_depth"] for e in ground if np.isfinite(e.get("no_depth", float("nan")))])))
     if a.json:
         with open(a.json, "w") as f:
             json.dump(results, f, indent=1)

@@ -1,6 +1,6 @@
 // hawor scale — metric scale of a SLAM trajectory (include/hawor/scale): AdaSM on metric depth
-// maps at the keyframes' sparse SLAM depths, the hand-anchored scale from camera-frame hands, or
-// both fused by confidence.
+// maps at the keyframes' sparse SLAM depths, the hand-anchored scale from camera-frame hands, the
+// cameras' height above the map's floor plane, fused by confidence.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -20,7 +20,8 @@ namespace {
 
 const char* kScaleHelp =
     "usage: hawor scale --traj TRAJ.tum --keyframe-depths KD.npz [--metric-depth DIR_OF_NPY]\n"
-    "                   [--masks DIR] [--hands HANDS_CAM.npz] --out TRAJ_METRIC.tum\n"
+    "                   [--masks DIR] [--hands HANDS_CAM.npz] [--intrinsics fx,fy,cx,cy]\n"
+    "                   [--eye-height M] --out TRAJ_METRIC.tum\n"
     "                   [--near M] [--far M] [--sigma M] [--sampling official|slam-depth]\n"
     "                   [--combine huber|median] [--baseline]\n"
     "\n"
@@ -35,6 +36,11 @@ const char* kScaleHelp =
     "  --hands HANDS_CAM.npz  camera-frame hands: [left_|right_]joints_cam (T,21,3) metres and\n"
     "                         [left_|right_]valid (T,): the hand-anchored scale from the wrists\n"
     "                         (hands holding still while the head moves; else their smoothness)\n"
+    "  --intrinsics fx,fy,cx,cy  the ground cue: the keyframe depths back-projected to map points;\n"
+    "                         the cameras' median height above the lowest horizontal level (the\n"
+    "                         floor) is --eye-height metres (scale/ground_scale.hpp)\n"
+    "  --eye-height M         camera height above the floor (default 1.6: a standing adult's\n"
+    "                         head-worn camera; about 1.2 sitting)\n"
     "  --sampling S           AdaSM's re-selection window on the metric depth and the scaled SLAM\n"
     "                         depth ('official', DESIGN 6) or on the scaled SLAM depth only\n"
     "                         plus a +-25 % gate about it ('slam-depth', default: no truncation\n"
@@ -47,8 +53,10 @@ const char* kScaleHelp =
     "                         is the official sampling) and this sampling's with the other --combine\n"
     "  --out TRAJ_METRIC.tum  the trajectory with positions multiplied by the scale\n"
     "\n"
-    "Prints {\"scale\", \"method\" (depth|hands|fused), \"confidence\", ...}. With both cues the\n"
-    "scales are combined in log space, weighted by their confidences.\n";
+    "Prints {\"scale\", \"method\" (depth|hands|ground|fused), \"confidence\", ...}. The cues that\n"
+    "need no depth network (hands, ground) are combined first, a floor reading that could be a\n"
+    "table top taking the reading nearer the hands'; then that and the depth cue: in log space,\n"
+    "weighted by their confidences.\n";
 
 std::string frameName(int f, const char* ext) {
   char b[32];
@@ -67,7 +75,8 @@ bool exists(const std::string& p) {
 
 int cmdScale(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"traj", "keyframe-depths", "metric-depth", "masks", "hands", "out", "near", "far", "sigma", "sampling", "combine"},
+                  {"traj", "keyframe-depths", "metric-depth", "masks", "hands", "intrinsics", "eye-height", "out", "near", "far",
+                   "sigma", "sampling", "combine"},
                   {"baseline"});
   if (args.help()) {
     std::fputs(kScaleHelp, stdout);
@@ -75,8 +84,8 @@ int cmdScale(int argc, char** argv) {
   }
   const std::vector<hawor::TumPose<double>> traj = hawor::readTum<double>(args.required("traj"));
   const std::string out = args.required("out");
-  if (!args.has("metric-depth") && !args.has("hands")) {
-    throw UsageError("give --metric-depth DIR, --hands HANDS_CAM.npz, or both");
+  if (!args.has("metric-depth") && !args.has("hands") && !args.has("intrinsics")) {
+    throw UsageError("give --metric-depth DIR, --hands HANDS_CAM.npz, --intrinsics fx,fy,cx,cy (the ground cue), or several");
   }
   if (traj.size() < 3) throw hawor::Error(args.required("traj") + ": need at least 3 poses");
   // Defaults of the library's one-call metric scale (scale/metric_scale.hpp): SLAM-depth
@@ -100,22 +109,38 @@ int cmdScale(int argc, char** argv) {
     throw UsageError("--combine must be 'huber' or 'median', not '" + combine + "'");
   }
   if (traj.size() >= 2 && traj[1].t > traj[0].t) opt.setFps(1.0 / (traj[1].t - traj[0].t));
+  opt.ground.eyeHeight = args.number("eye-height", opt.ground.eyeHeight);
+  if (!(opt.ground.eyeHeight > opt.ground.tableHeight)) {
+    throw UsageError("--eye-height must exceed the table height (" + std::to_string(opt.ground.tableHeight) + " m)");
+  }
 
   // Depth cue: each keyframe's sparse SLAM depths paired with its metric depth map (and mask).
   std::vector<hawor::KeyframeDepthPairs<double>> keyframes;
-  if (args.has("metric-depth")) {
+  std::vector<int> frames, kf;
+  std::vector<double> uv, depth;
+  if (args.has("metric-depth") || args.has("intrinsics")) {
     const std::string kdPath = args.required("keyframe-depths");
     const hawor::Npz kd = hawor::Npz::read(kdPath);
     for (const char* key : {"frames", "kf", "uv", "depth"}) {
       if (!kd.has(key)) throw hawor::Error(kdPath + ": missing array '" + key + "'");
     }
-    const std::vector<int> frames = kd.get("frames").as<int>(kdPath + ": frames");
-    const std::vector<int> kf = kd.get("kf").as<int>(kdPath + ": kf");
-    const std::vector<double> uv = kd.get("uv").as<double>(kdPath + ": uv");
-    const std::vector<double> depth = kd.get("depth").as<double>(kdPath + ": depth");
+    frames = kd.get("frames").as<int>(kdPath + ": frames");
+    kf = kd.get("kf").as<int>(kdPath + ": kf");
+    uv = kd.get("uv").as<double>(kdPath + ": uv");
+    depth = kd.get("depth").as<double>(kdPath + ": depth");
     if (kf.size() != depth.size() || uv.size() != 2 * depth.size()) {
       throw hawor::Error(kdPath + ": kf, uv and depth disagree in length");
     }
+    for (std::size_t i = 0; i < kf.size(); ++i) {
+      if (kf[i] < 0 || static_cast<std::size_t>(kf[i]) >= frames.size()) throw hawor::Error(kdPath + ": kf out of range");
+    }
+    for (int f : frames) {
+      if (f < 0 || static_cast<std::size_t>(f) >= traj.size()) {
+        throw hawor::Error(kdPath + ": keyframe " + std::to_string(f) + " is not a frame of the trajectory");
+      }
+    }
+  }
+  if (args.has("metric-depth")) {
     const std::string dir = args.required("metric-depth");
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const std::string p = dir + "/" + frameName(frames[k], ".npy");
@@ -170,7 +195,18 @@ int cmdScale(int argc, char** argv) {
   std::vector<hawor::SE3<double>> poses;
   for (const auto& p : traj) poses.emplace_back(hawor::SO3<double>::fromQuaternion(Eigen::Quaterniond(p.q)), hawor::Vec3<double>(p.p));
 
-  const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, tracks, opt);
+  // Ground cue: the keyframes' depths back-projected into the world, p = T_w_c · (z·K⁻¹[u v 1]).
+  std::vector<hawor::Vec3<double>> mapPoints;
+  if (args.has("intrinsics")) {
+    const std::vector<double> k = args.numbers("intrinsics", 4);
+    if (!(k[0] > 0) || !(k[1] > 0)) throw UsageError("--intrinsics expects fx,fy,cx,cy with fx, fy > 0");
+    for (std::size_t i = 0; i < depth.size(); ++i) {
+      const hawor::Vec3<double> xc((uv[2 * i] - k[2]) / k[0] * depth[i], (uv[2 * i + 1] - k[3]) / k[1] * depth[i], depth[i]);
+      mapPoints.push_back(poses[static_cast<std::size_t>(frames[static_cast<std::size_t>(kf[i])])] * xc);
+    }
+  }
+
+  const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, tracks, opt, &mapPoints);
   JsonObject j;
   if (r.depthRan) {
     j.integer("keyframes", r.depth.keyframes).integer("keyframes_fitted", r.depth.fitted);
@@ -200,11 +236,22 @@ int cmdScale(int argc, char** argv) {
     j.str("hand_cue", r.hands.method).integer("hand_residuals", r.hands.residuals).integer("hand_rest", r.hands.restFrames);
     if (r.hands.ok()) j.num("hand_scale", r.hands.scale).num("hand_confidence", r.hands.confidence);
   }
+  if (r.groundRan) {
+    if (r.ground.ok()) {
+      j.num("ground_scale", r.groundUsed).num("ground_confidence", r.ground.confidence).num("ground_floor_scale", r.ground.scale);
+      j.integer("ground_floor_points", r.ground.floorPoints).integer("ground_levels", r.ground.levels);
+      j.raw("ground_ambiguous", r.ground.ambiguous ? "true" : "false");
+      if (std::isfinite(r.ground.surfaceHeight)) j.num("ground_surface_m", r.ground.surfaceHeight);
+    } else {
+      j.str("ground_reason", r.ground.reason);
+    }
+  }
   const hawor::FusedScale<double>& fused = r.fused;
   if (!fused.ok()) {
     throw hawor::Error(
-        "no metric scale could be estimated: no keyframe had usable metric depth, and no hand held still while the "
-        "camera moved nor gave a positive smoothness scale");
+        "no metric scale could be estimated: no keyframe had usable metric depth, no hand held still while the "
+        "camera moved nor gave a positive smoothness scale, and no floor was found in the map" +
+        (r.groundRan ? " (" + r.ground.reason + ")" : std::string()));
   }
   const double scale = fused.scale;
   std::vector<hawor::TumPose<double>> scaled = traj;

@@ -3,7 +3,9 @@ a table at a known metric scale, the "SLAM" trajectory and keyframe depths divid
 metric depth maps with the depth network's errors (bias, noise, outliers) and a hand region; hands
 whose camera-frame wrists follow from world paths (one hand rests on the table for 2 s).
 Checks: the depth scale (both samplings, the median baseline), the hand scale (hold cue), the
-fused scale in log space, the scaled TUM file; and bad input: missing arrays, wrong shapes, a
+fused scale in log space, the scaled TUM file; the ground cue on keyframe depths ray-cast here onto
+a floor and a table top (the cameras' height above the floor in map units against the eye-height
+prior); and bad input: missing arrays, wrong shapes, a
 depth map of the wrong size, NaN maps, no usable cue, an unknown --sampling (clear message,
 exit code 1 or 2, never a NaN scale).
 Run: /usr/bin/python3 test_scale_cli.py path/to/hawor
@@ -136,12 +138,63 @@ def main():
         check("fused: log-space weighted mean", abs(j["scale"] / ref - 1) < 1e-9, so)
 
     # Bad input.
+    # Ground cue: a head-worn camera 1.6 m above a floor (room z up), walking along x, looking
+    # down 30-60 degrees; keyframe depths where its rays meet the floor z = 0 or a table top
+    # z = 0.75 (x in [1, 2.5], y in [0.8, 1.6]); the map is the room / alpha.
+    gt = np.arange(150) / fps
+    gc = np.stack([0.4 * gt, 0.1 * np.sin(gt), 1.6 + 0.01 * np.sin(9 * gt)], 1)
+    fx, fy, cx, cy = 60.0, 60.0, 40.0, 30.0
+    g_rot = []
+    for i in range(len(gt)):
+        yaw, pitch = 0.3 * np.sin(0.8 * gt[i]) + np.pi / 2 * (i // 50 % 2), -0.5 - 0.25 * np.sin(1.3 * gt[i])
+        f = np.array([np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), np.sin(pitch)])
+        rt = np.array([np.sin(yaw), -np.cos(yaw), 0.0])
+        g_rot.append(np.stack([rt, np.cross(f, rt), f], 1))   # camera-to-room: x right, y down, z forward
+    g_rot = Rotation.from_matrix(np.array(g_rot))
+    gtraj = os.path.join(tmp, "traj_ground.tum")
+    write_tum(gtraj, gt, gc / alpha, g_rot.as_quat())
+    gframes = np.arange(0, len(gt), 10)
+    gkf, guv, gdep = [], [], []
+    for k, f in enumerate(gframes):
+        px = np.stack([rng.uniform(0, W, 120), rng.uniform(0, H, 120)], 1)
+        rays = g_rot[f].apply(np.stack([(px[:, 0] - cx) / fx, (px[:, 1] - cy) / fy, np.ones(len(px))], 1))
+        for u, d in zip(px, rays):
+            if d[2] >= -1e-3:
+                continue
+            lam = (0.75 - gc[f, 2]) / d[2]                     # the table top first, then the floor
+            hit = gc[f] + lam * d
+            if not (1 <= hit[0] <= 2.5 and 0.8 <= hit[1] <= 1.6):
+                lam = -gc[f, 2] / d[2]
+            gkf.append(k), guv.append(u), gdep.append(lam / alpha * (1 + 0.003 * rng.standard_normal()))
+    gkd = os.path.join(tmp, "kd_ground.npz")
+    np.savez(gkd, frames=gframes.astype(np.int64), kf=np.array(gkf, np.int64), uv=np.array(guv), depth=np.array(gdep))
+    intr = "%g,%g,%g,%g" % (fx, fy, cx, cy)
+    rc, so, se = run("scale", "--traj", gtraj, "--keyframe-depths", gkd, "--intrinsics", intr, "--out", out)
+    check("ground: exit 0", rc == 0, se)
+    if rc == 0:
+        j = json.loads(so)
+        check("ground: method", j["method"] == "ground", so)
+        check("ground: scale within 2 %", abs(j["scale"] / alpha - 1) < 0.02, so)
+        check("ground: the table top found at 0.75 m", abs(j.get("ground_surface_m", 0) - 0.75) < 0.05, so)
+        check("ground: not ambiguous, confidence in (0, 0.5]", not j["ground_ambiguous"] and 0 < j["confidence"] <= 0.5, so)
+    rc, so, se = run("scale", "--traj", gtraj, "--keyframe-depths", gkd, "--intrinsics", intr, "--eye-height", "1.2",
+                     "--out", out)
+    check("ground: --eye-height scales the answer", rc == 0 and abs(json.loads(so)["scale"] / alpha - 0.75) < 0.02, so + se)
+
     def bad(name, args, code=(1, 2), needle=None):
         rc, so, se = run("scale", *args)
         ok = rc in code and "nan" not in so.lower() and (needle is None or needle in se)
         check(name, ok, "rc=%d stdout=%s stderr=%s" % (rc, so, se))
 
     bad("no cue", ["--traj", traj, "--out", out], needle="--metric-depth")
+    bad("ground: bad intrinsics", ["--traj", gtraj, "--keyframe-depths", gkd, "--intrinsics", "60,60", "--out", out],
+        needle="--intrinsics")
+    bad("ground: eye below the table", ["--traj", gtraj, "--keyframe-depths", gkd, "--intrinsics", intr,
+                                        "--eye-height", "0.5", "--out", out], needle="--eye-height")
+    bad("ground: no keyframe depths", ["--traj", gtraj, "--intrinsics", intr, "--out", out], needle="keyframe-depths")
+    # The depths of the walking scene (a random cloud, no floor): a reason, no scale, no crash.
+    bad("ground: no floor in the map", ["--traj", traj, "--keyframe-depths", kd, "--intrinsics", intr, "--out", out],
+        needle="no metric scale")
     bad("unknown sampling", ["--traj", traj, "--hands", hp, "--out", out, "--sampling", "magic"], needle="sampling")
     np.savez(os.path.join(tmp, "kd_missing.npz"), frames=frames, kf=np.zeros(3, np.int64))
     bad("kd missing arrays", ["--traj", traj, "--keyframe-depths", os.path.join(tmp, "kd_missing.npz"),
