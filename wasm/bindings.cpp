@@ -27,8 +27,9 @@
 //       evaluations, reason}}
 //   metricScale({rotations, translations, fps?, keyframeDepths?, depthMaps?: [Float32Array],
 //       depthWidth?, depthHeight?, masks?: [Uint8Array|null], hands?: [{positions (3T), valid}],
+//       points?: Float64Array (3N map points, world, SLAM units: the ground cue), eyeHeight?,
 //       sampling?: 'slam-depth'|'official', combine?: 'huber'|'median'})
-//       -> {scale, method ('depth'|'hands'|'fused'|'none'), confidence, ...}
+//       -> {scale, method ('depth'|'hands'|'ground'|'fused'|'none'), confidence, ...}
 //   infillHand(motion, T, method 'spline'|'lerp'|'last', model|null) -> motion & {filled}
 //   cameraToWorld(motion, T, rotations, translations, scale, model|null) -> motion
 //   motion objects: {rot (3T), trans (3T), handPose (3KT), betas (BT), valid: Uint8Array(T)}.
@@ -568,8 +569,22 @@ val metricScale(const val& in) {
         hands.push_back(std::move(track));
       }
     }
-    if (keyframes.empty() && hands.empty()) throw hawor::Error("give depthMaps (with keyframeDepths), hands, or both");
-    const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, hands, opt);
+    std::vector<hawor::Vec3<double>> mapPoints;
+    if (!absent(in["points"])) {
+      const std::vector<double> p = fromTyped<double>(in["points"]);
+      if (p.size() % 3 != 0) throw hawor::Error("points: length is not a multiple of 3");
+      for (size_t i = 0; i + 2 < p.size(); i += 3) mapPoints.emplace_back(p[i], p[i + 1], p[i + 2]);
+    }
+    if (!absent(in["eyeHeight"])) {
+      opt.ground.eyeHeight = in["eyeHeight"].as<double>();
+      if (!(opt.ground.eyeHeight > opt.ground.tableHeight) || !std::isfinite(opt.ground.eyeHeight)) {
+        throw hawor::Error("eyeHeight must be a number above the table height (" + std::to_string(opt.ground.tableHeight) + " m)");
+      }
+    }
+    if (keyframes.empty() && hands.empty() && absent(in["points"])) {
+      throw hawor::Error("give depthMaps (with keyframeDepths), hands, points, or several");
+    }
+    const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, hands, opt, &mapPoints);
     val o = val::object();
     o.set("scale", r.fused.ok() ? r.fused.scale : std::nan(""));
     o.set("method", r.fused.ok() ? r.fused.method : std::string("none"));
@@ -584,6 +599,26 @@ val metricScale(const val& in) {
       o.set("handCue", r.hands.method);
       o.set("handScale", r.hands.scale);
       o.set("handConfidence", r.hands.confidence);
+    }
+    if (r.groundRan) {
+      val g = val::object();
+      g.set("ok", r.ground.ok());
+      if (r.ground.ok()) {
+        g.set("scale", r.groundUsed);  // the reading fused (floor, or the table top when ambiguous)
+        g.set("floorScale", r.ground.scale);
+        g.set("confidence", r.ground.confidence);
+        g.set("cameraHeight", r.ground.height);  // map units
+        g.set("heightSpread", r.ground.heightSpread);
+        g.set("floorPoints", r.ground.floorPoints);
+        g.set("levels", r.ground.levels);
+        g.set("ambiguous", r.ground.ambiguous);
+        g.set("eyeHeight", opt.ground.eyeHeight);
+        if (std::isfinite(r.ground.surfaceHeight)) g.set("surfaceHeight", r.ground.surfaceHeight);
+        g.set("up", f64(r.ground.up.data(), 3));
+      } else {
+        g.set("reason", r.ground.reason);
+      }
+      o.set("ground", g);
     }
     return o;
   });

@@ -5,6 +5,7 @@
 //   node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
+//        [--eye-height M | --no-ground-scale]
 //
 // Writes DIR/world.npz, DIR/hands_cam.npz, DIR/camera.tum and DIR/result.json (exports.mjs
 // describes them), prints a progress bar and a per-stage timing table on stderr and one JSON
@@ -28,7 +29,7 @@ import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
-const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]';
+const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -58,6 +59,8 @@ export function parseArgs(argv) {
     else if (a === '--models') o.models = next();
     else if (a === '--max-frames') { o.maxFrames = num(next(), '--max-frames', 0); if (!Number.isInteger(o.maxFrames)) throw usage('--max-frames must be an integer'); }
     else if (a === '--infill') { o.infill = next(); if (!['spline', 'lerp', 'last'].includes(o.infill)) throw usage(`--infill must be spline, lerp or last, not '${o.infill}'`); }
+    else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); if (!(o.eyeHeight > 0.8 && o.eyeHeight < 3)) throw usage('--eye-height must be between 0.8 and 3 metres (the camera above the floor)'); }
+    else if (a === '--no-ground-scale') o.groundScale = false;
     else if (a === '--help' || a === '-h') return { help: true };
     else if (a.startsWith('--')) throw usage(`unknown option '${a}'`);
     else if (!o.video) o.video = a;
@@ -67,6 +70,7 @@ export function parseArgs(argv) {
   if (!o.out) throw usage('--out DIR is required');
   if (o.focalPx !== undefined && o.fovDeg !== undefined) throw usage('give --focal or --fov, not both');
   if (o.depthConfig && !o.depthModel) throw usage('--depth-config needs --depth-model');
+  if (o.eyeHeight !== undefined && o.groundScale === false) throw usage('give --eye-height or --no-ground-scale, not both');
   return o;
 }
 
@@ -235,6 +239,7 @@ export async function main(argv) {
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
     handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
+    groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight,
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };

@@ -9,7 +9,7 @@
 // The parts that need the native build (its `hawor` CLI and models/) are skipped, with a line
 // saying so, when it is absent.
 import { createRequire } from 'node:module';
-import { execFileSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -483,6 +483,30 @@ if (!haveNative || !fs.existsSync(path.join(nativeDir, 'models', 'hand_right.npz
   check('metric scale close to the truth', Math.abs(scale.scale / sim3 - 1) < 0.1, `${scale.scale} vs ${sim3}`);
   const handsOnly = core.metricScale({ rotations: res.rotations, translations: res.translations, fps, hands: wrists });
   check('hand-only scale', ['hands', 'none'].includes(handsOnly.method) && handsOnly.depthScale === undefined);
+  // Ground cue on the keyframe depths back-projected here (p = R·z·K⁻¹[u v 1] + t, as `hawor scale
+  // --intrinsics` does): the same answer (or the same absence) as the native tool.
+  const pts = new Float64Array(3 * kd.depth.length);
+  for (let i = 0; i < kd.depth.length; i++) {
+    const f = kd.frames[kd.kf[i]], z = kd.depth[i];
+    const xc = [(kd.uv[2 * i] - cx) / fx * z, (kd.uv[2 * i + 1] - cy) / fy * z, z];
+    for (let a = 0; a < 3; a++) {
+      pts[3 * i + a] = res.translations[3 * f + a] +
+        res.rotations[9 * f + 3 * a] * xc[0] + res.rotations[9 * f + 3 * a + 1] * xc[1] + res.rotations[9 * f + 3 * a + 2] * xc[2];
+    }
+  }
+  const groundW = core.metricScale({ rotations: res.rotations, translations: res.translations, fps, points: pts });
+  const groundN = spawnSync(hawor, ['scale', '--traj', path.join(tmp, 'wasm.tum'), '--keyframe-depths', path.join(tmp, 'kd.npz'),
+    '--intrinsics', [...Ks].join(','), '--out', path.join(tmp, 'metric_ground.tum')], { encoding: 'utf8' });
+  if (groundN.status === 0) {
+    const n = JSON.parse(groundN.stdout);
+    check('metricScale ground cue equals the native hawor scale --intrinsics', groundW.ground.ok && close(groundW.scale, n.scale, 1e-9) &&
+      groundW.method === n.method && close(groundW.ground.confidence, n.ground_confidence, 1e-9), `${JSON.stringify(groundW)} vs ${groundN.stdout}`);
+  } else {
+    check('metricScale ground cue: no floor, like the native tool', !groundW.ground.ok && groundW.method === 'none' &&
+      groundN.stderr.includes(groundW.ground.reason), `${JSON.stringify(groundW)} vs ${groundN.stderr}`);
+  }
+  throwsWith('metricScale: bad eyeHeight', () => core.metricScale({ rotations: res.rotations, translations: res.translations,
+    points: pts, eyeHeight: 0.5 }), 'eyeHeight');
   throwsWith('metricScale: no cue', () => core.metricScale({ rotations: res.rotations, translations: res.translations }),
     'give depthMaps');
   throwsWith('metricScale: depth map of the wrong size', () => core.metricScale({ rotations: res.rotations,

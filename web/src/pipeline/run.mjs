@@ -54,7 +54,11 @@
 //                                        the other only every detectGap+1 frames
 //           minPresence? (0.3)           the landmark network's hand presence to keep a hand
 //                                        (MediaPipe's 0.5 drops the wearer's hand gripping a
-//                                        plate on the kitchen clip; tests/web/kitchen_hands) }
+//                                        plate on the kitchen clip; tests/web/kitchen_hands)
+//           groundScale? (true)          the ground cue of the metric scale: the cameras' height
+//                                        above the map's floor plane (scale/ground_scale.hpp)
+//           eyeHeight? (1.6)             that height in metres (a standing adult's head camera;
+//                                        about 1.2 sitting) }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
@@ -76,7 +80,8 @@
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
 //   points: (N*3) the SLAM's final map points, world frame, metres; may be empty,
-//   scale: { scale, method: 'depth'|'hands'|'fused'|'none', confidence, ... (metricScale's fields) },
+//   scale: { scale, method: 'depth'|'hands'|'ground'|'fused'|'none', confidence, ... (metricScale's
+//            fields; ground: { ok, scale, confidence, cameraHeight, surfaceHeight, ... } or { ok, reason }) },
 //   hands: { left: Hand, right: Hand },  Hand = {
 //     valid (T: observed and fitted), infilled (T: filled by the infiller), present (any frame),
 //     trans (T*3), rot (T*3 axis-angle), handPose (T*P), betas (T*B)   world frame, metres;
@@ -623,13 +628,16 @@ export async function runPipeline(source, options, hooks = {}) {
       wristTracks.push({ positions, valid: hands[side].valid });
     }
     let scale = { scale: NaN, method: 'none', confidence: 0 };
-    if (traj.initialised && (wristTracks.length || depthMaps)) {
+    const groundCue = options.groundScale ?? true;
+    const havePoints = groundCue && traj.points && traj.points.length >= 3;
+    if (traj.initialised && (wristTracks.length || depthMaps || havePoints)) {
       try {
         const masksKf = depthMaps ? Array.from(traj.keyframeDepths.frames, (f) => keptMasks[f] ?? null) : undefined;
         scale = core.metricScale({
           rotations: traj.rotations, translations: traj.translations, fps,
           ...(depthMaps ? { keyframeDepths: traj.keyframeDepths, depthMaps, depthWidth: ss.width, depthHeight: ss.height, masks: masksKf } : {}),
           ...(wristTracks.length ? { hands: wristTracks } : {}),
+          ...(havePoints ? { points: traj.points, ...(options.eyeHeight ? { eyeHeight: options.eyeHeight } : {}) } : {}),
         });
       } catch (e) {
         warnings.push(`metric scale: ${e.message}`);
@@ -639,7 +647,7 @@ export async function runPipeline(source, options, hooks = {}) {
     if (!(Number.isFinite(s) && s > 0)) {
       // No metric cue: keep the SLAM's own units, flagged (the trajectory's shape is still right).
       s = 1;
-      if (traj.initialised) warnings.push('no metric scale could be estimated (no depth model and no usable hand cue): the camera trajectory is in the SLAM\'s arbitrary units');
+      if (traj.initialised) warnings.push('no metric scale could be estimated (no depth model, no usable hand cue, no floor in the map): the camera trajectory is in the SLAM\'s arbitrary units');
       scale = { ...scale, scale: 1, method: 'none', confidence: 0 };
     } else if (scale.confidence < 0.4) {
       warnings.push(`the metric scale is uncertain (method ${scale.method}, confidence ${scale.confidence.toFixed(2)})`);
