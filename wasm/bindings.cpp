@@ -30,6 +30,9 @@
 //       points?: Float64Array (3N map points, world, SLAM units: the ground cue), eyeHeight?,
 //       sampling?: 'slam-depth'|'official', combine?: 'huber'|'median'})
 //       -> {scale, method ('depth'|'hands'|'ground'|'fused'|'none'), confidence, ...}
+//   downscaleImage(src: Uint8Array (sw*sh*channels), sw, sh, channels 1|3|4, dw, dh, grey: bool)
+//       -> Uint8Array (dw*dh grey or dw*dh*3 RGB): box filter (render/resample.hpp)
+//   rotationsToQuaternions(rotations: Float64Array (9T, row-major)) -> Float64Array (4T: x, y, z, w; w >= 0)
 //   infillHand(motion, T, method 'spline'|'lerp'|'last', model|null) -> motion & {filled}
 //   cameraToWorld(motion, T, rotations, translations, scale, model|null) -> motion
 //   motion objects: {rot (3T), trans (3T), handPose (3KT), betas (BT), valid: Uint8Array(T)}.
@@ -56,6 +59,8 @@
 #include "hawor/motion/rest_root.hpp"
 #include "hawor/render/hand_masks.hpp"
 #include "hawor/scale/metric_scale.hpp"
+#include "hawor/geometry/rotation.hpp"
+#include "hawor/render/resample.hpp"
 #include "hawor/slam/mono_slam.hpp"
 
 using emscripten::val;
@@ -496,6 +501,32 @@ val cameraToWorld(const val& motion, int T, const val& rotations, const val& tra
   });
 }
 
+// --- frames and rotations ------------------------------------------------------------------------
+
+val downscaleImage(const val& src, int sw, int sh, int channels, int dw, int dh, bool grey) {
+  return guard("downscaleImage", [&] {
+    if (sw <= 0 || sh <= 0 || channels <= 0) throw hawor::Error("downscaleImage: empty source image");
+    const std::vector<uint8_t> in = exactly<uint8_t>(src, static_cast<size_t>(sw) * sh * channels, "downscaleImage: src");
+    std::vector<uint8_t> out(static_cast<size_t>(std::max(dw, 0)) * std::max(dh, 0) * (grey ? 1 : 3));
+    hawor::downscaleBox(in.data(), sw, sh, channels, dw, dh, grey, out.data());
+    return toTyped(out.data(), out.size(), "Uint8Array");
+  });
+}
+
+val rotationsToQuaternions(const val& rotations) {
+  return guard("rotationsToQuaternions", [&] {
+    const std::vector<double> R = fromTyped<double>(rotations);
+    if (R.size() % 9 != 0) throw hawor::Error("rotationsToQuaternions: length " + std::to_string(R.size()) + " is not 9T");
+    std::vector<double> q(R.size() / 9 * 4);
+    for (size_t t = 0; t < R.size() / 9; ++t) {
+      const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> M(R.data() + 9 * t);
+      const Eigen::Quaterniond e = hawor::matrixToQuaternion(Eigen::Matrix3d(M));
+      q[4 * t] = e.x(), q[4 * t + 1] = e.y(), q[4 * t + 2] = e.z(), q[4 * t + 3] = e.w();
+    }
+    return f64(q.data(), q.size());
+  });
+}
+
 // --- metric scale --------------------------------------------------------------------------------
 
 val metricScale(const val& in) {
@@ -766,6 +797,8 @@ EMSCRIPTEN_BINDINGS(hawor_core) {
       .function("finish", &MonoSlam::finish);
   emscripten::function("renderHandMasks", &renderHandMasks);
   emscripten::function("metricScale", &metricScale);
+  emscripten::function("downscaleImage", &downscaleImage);
+  emscripten::function("rotationsToQuaternions", &rotationsToQuaternions);
   emscripten::function("infillHand", &infillHand);
   emscripten::function("cameraToWorld", &cameraToWorld);
   emscripten::function("evaluateCameras", &evaluateCameras);

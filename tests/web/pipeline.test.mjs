@@ -14,7 +14,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { root, clipPath, clipSkipReason, modelsSkipReason } from './mediapipe_support.mjs';
 import { rng } from './support.mjs';
-import { defaultIntrinsics, downscaleGrey, matToQuat, assignSides, runPipeline, slamSize, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
+import { defaultIntrinsics, assignSides, runPipeline, slamSize, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from '../../web/src/pipeline/exports.mjs';
 
 const corePath = process.env.HAWOR_CORE ?? join(root, 'build/wasm/wasm/hawor_core.mjs');
@@ -78,11 +78,13 @@ test('pipeline: intrinsics from a focal or a diagonal field of view', () => {
   assert.deepEqual([slamSize(320, 240).width, slamSize(320, 240).height], [320, 240]);
 });
 
-test('pipeline: box-filtered grey against a brute-force average, integer and fractional ratios', () => {
+test('core.downscaleImage (the SLAM frames): box-filtered grey against a brute-force average, integer and fractional ratios', { skip: coreSkip() }, async () => {
+  const core = await loadCore();
   const r = rng(5);
   for (const [sw, sh, dw, dh, c] of [[12, 9, 4, 3, 3], [10, 7, 4, 3, 4], [7, 5, 7, 5, 3]]) {
     const src = Uint8Array.from({ length: sw * sh * c }, () => Math.floor(256 * r()));
-    const out = downscaleGrey(src, sw, sh, c, dw, dh);
+    const out = core.downscaleImage(src, sw, sh, c, dw, dh, true);
+    assert.ok(out instanceof Uint8Array && out.length === dw * dh);
     for (let y = 0; y < dh; ++y) {
       for (let x = 0; x < dw; ++x) {
         let acc = 0; let n = 0;
@@ -100,14 +102,28 @@ test('pipeline: box-filtered grey against a brute-force average, integer and fra
   }
 });
 
-test('pipeline: rotation matrix -> quaternion (x, y, z, w) against Rodrigues', () => {
+test('core.downscaleImage: RGB output and bad sizes', { skip: coreSkip() }, async () => {
+  const core = await loadCore();
+  const src = Uint8Array.from({ length: 4 * 2 * 4 }, (_, i) => (i * 37) % 256);
+  const rgb = core.downscaleImage(src, 4, 2, 4, 2, 1, false);
+  assert.equal(rgb.length, 2 * 3);
+  for (let k = 0; k < 3; ++k) {
+    const px = (x, y) => src[4 * (y * 4 + x) + k];
+    assert.equal(rgb[k], Math.round((px(0, 0) + px(1, 0) + px(0, 1) + px(1, 1)) / 4 + 1e-9));
+  }
+  assert.throws(() => core.downscaleImage(src, 4, 2, 4, 8, 1, true), /not a downscale/);
+  assert.throws(() => core.downscaleImage(src.subarray(1), 4, 2, 4, 2, 1, true), /src/);
+});
+
+test('core.rotationsToQuaternions: rotation matrices -> quaternions (x, y, z, w) against Rodrigues', { skip: coreSkip() }, async () => {
+  const core = await loadCore();
   const r = rng(9);
   for (let i = 0; i < 50; ++i) {
     const ax = [r() - 0.5, r() - 0.5, r() - 0.5];
     const n = Math.hypot(...ax); const a = ax.map((v) => v / n); const th = (i === 0 ? 3.14159 : 3 * r());
     const [x, y, z] = a; const c = Math.cos(th); const s = Math.sin(th); const C = 1 - c;
     const R = [c + x * x * C, x * y * C - z * s, x * z * C + y * s, y * x * C + z * s, c + y * y * C, y * z * C - x * s, z * x * C - y * s, z * y * C + x * s, c + z * z * C];
-    const q = matToQuat(R);
+    const q = core.rotationsToQuaternions(Float64Array.from(R));
     const expect = [a[0] * Math.sin(th / 2), a[1] * Math.sin(th / 2), a[2] * Math.sin(th / 2), Math.cos(th / 2)];
     for (let k = 0; k < 4; ++k) assert.ok(Math.abs(q[k] - expect[k]) < 1e-9, `${q} vs ${expect}`);
   }

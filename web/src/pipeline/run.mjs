@@ -153,75 +153,6 @@ export function slamSize(width, height, maxSide = 640) {
   return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
 }
 
-/** Box-filtered grey (BT.601 luma, integer weights) of an RGB(A) image at (dw, dh); each output pixel averages
- *  the source pixels whose centres fall in its footprint (one pass over the source, row sums
- *  per output column). out: optional Uint8Array(dw*dh). */
-export function downscaleGrey(src, sw, sh, channels, dw, dh, out = new Uint8Array(dw * dh)) {
-  const ox = new Int32Array(sw);
-  const cw = new Int32Array(dw);
-  for (let x = 0; x < sw; ++x) { ox[x] = Math.min(dw - 1, Math.floor(((x + 0.5) * dw) / sw)); cw[ox[x]] += 1; }
-  // integer luma weights (BT.601 x 256): 77 R + 150 G + 29 B
-  const acc = new Int32Array(dw);
-  let y = 0;
-  for (let oy = 0; oy < dh; ++oy) {
-    acc.fill(0);
-    let rows = 0;
-    for (; y < sh && Math.min(dh - 1, Math.floor(((y + 0.5) * dh) / sh)) === oy; ++y, ++rows) {
-      let p = y * sw * channels;
-      for (let x = 0; x < sw; ++x, p += channels) acc[ox[x]] += 77 * src[p] + 150 * src[p + 1] + 29 * src[p + 2];
-    }
-    const o = oy * dw;
-    if (rows === 0) { // upscaling: repeat the previous row
-      if (oy > 0) out.copyWithin(o, o - dw, o);
-      continue;
-    }
-    for (let x = 0; x < dw; ++x) out[o + x] = cw[x] ? Math.min(255, Math.round(acc[x] / (256 * rows * cw[x]))) : 0;
-  }
-  return out;
-}
-
-/** Box-filtered RGB copy at (dw, dh) (for the depth network on keyframes). */
-export function downscaleRgb(src, sw, sh, channels, dw, dh) {
-  const out = new Uint8Array(dw * dh * 3);
-  for (let y = 0; y < dh; ++y) {
-    const ya = Math.round((y * sh) / dh);
-    const yb = Math.max(ya + 1, Math.min(sh, Math.round(((y + 1) * sh) / dh)));
-    for (let x = 0; x < dw; ++x) {
-      const xa = Math.round((x * sw) / dw);
-      const xb = Math.max(xa + 1, Math.min(sw, Math.round(((x + 1) * sw) / dw)));
-      let r = 0; let g = 0; let b = 0;
-      for (let yy = ya; yy < yb; ++yy) {
-        for (let xx = xa; xx < xb; ++xx) {
-          const p = (yy * sw + xx) * channels;
-          r += src[p]; g += src[p + 1]; b += src[p + 2];
-        }
-      }
-      const n = (yb - ya) * (xb - xa);
-      const o = 3 * (y * dw + x);
-      out[o] = Math.round(r / n); out[o + 1] = Math.round(g / n); out[o + 2] = Math.round(b / n);
-    }
-  }
-  return out;
-}
-
-/** Rotation matrix (row-major 9) -> quaternion [x, y, z, w] (Shepperd), w >= 0. */
-export function matToQuat(R, o = 0) {
-  const [m00, m01, m02, m10, m11, m12, m20, m21, m22] = [R[o], R[o + 1], R[o + 2], R[o + 3], R[o + 4], R[o + 5], R[o + 6], R[o + 7], R[o + 8]];
-  const tr = m00 + m11 + m22;
-  let x; let y; let z; let w;
-  if (tr > 0) {
-    const s = 2 * Math.sqrt(tr + 1); w = s / 4; x = (m21 - m12) / s; y = (m02 - m20) / s; z = (m10 - m01) / s;
-  } else if (m00 > m11 && m00 > m22) {
-    const s = 2 * Math.sqrt(1 + m00 - m11 - m22); w = (m21 - m12) / s; x = s / 4; y = (m01 + m10) / s; z = (m02 + m20) / s;
-  } else if (m11 > m22) {
-    const s = 2 * Math.sqrt(1 + m11 - m00 - m22); w = (m02 - m20) / s; x = (m01 + m10) / s; y = s / 4; z = (m12 + m21) / s;
-  } else {
-    const s = 2 * Math.sqrt(1 + m22 - m00 - m11); w = (m10 - m01) / s; x = (m02 + m20) / s; y = (m12 + m21) / s; z = s / 4;
-  }
-  const n = Math.hypot(x, y, z, w) * (w < 0 ? -1 : 1);
-  return [x / n, y / n, z / n, w / n];
-}
-
 /** P(right) of a detection from its label and score. */
 function pRight(h) {
   const s = h.handednessScore ?? 1;
@@ -405,7 +336,6 @@ export async function runPipeline(source, options, hooks = {}) {
     const rerunBytes = options.focalRerunBytes ?? 256 * 1024 * 1024;
     let keptSlam = refineFocal && rerunBytes > 0 ? { frames: [], masks: [], bytes: 0 } : null;
     owned.push(slam);
-    const grey = new Uint8Array(ss.width * ss.height);
     const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
     const keptRgb = depthModel ? [] : null; // frames (and hand masks) for the depth of the keyframes
     const keptMasks = depthModel ? [] : null;
@@ -477,13 +407,13 @@ export async function runPipeline(source, options, hooks = {}) {
       // --- SLAM ---
       t1 = now();
       // at the frame's own size the core converts to grey itself
-      const slamFrame = ss.width === width && ss.height === height ? rgba : downscaleGrey(rgba, width, height, c, ss.width, ss.height, grey);
-      if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : downscaleRgb(rgba, width, height, c, ss.width, ss.height));
+      const slamFrame = ss.width === width && ss.height === height ? rgba : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true);
+      if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, false));
       if (keptSlam) {
         if (keptSlam.bytes + 2 * ss.width * ss.height > rerunBytes) {
           keptSlam = null; // too long a video for a second SLAM pass: the focal is refined in the final BA only
         } else {
-          const g = slamFrame === rgba ? downscaleGrey(rgba, width, height, c, ss.width, ss.height) : grey.slice();
+          const g = slamFrame === rgba ? core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true) : slamFrame;
           keptSlam.frames.push(g);
           keptSlam.masks.push(mask);
           keptSlam.bytes += g.length + (mask ? mask.length : 0);
@@ -657,11 +587,10 @@ export async function runPipeline(source, options, hooks = {}) {
 
     // --- camera in metres ---
     const positions = new Float64Array(3 * T);
-    const quaternions = new Float64Array(4 * T);
+    const quaternions = core.rotationsToQuaternions(traj.rotations);
     const timestamps = new Float64Array(T);
     for (let t = 0; t < T; ++t) {
       for (let a = 0; a < 3; ++a) positions[3 * t + a] = s * traj.translations[3 * t + a];
-      quaternions.set(matToQuat(traj.rotations, 9 * t), 4 * t);
       timestamps[t] = t / fps;
     }
     // SLAM points: the final map (cores before it was exported: the keyframe depths
