@@ -142,6 +142,11 @@ test('bad inputs give clear messages and the app stays usable', { skip }, async 
   await expectError('Wrong MANO file');
   await page.click('#btn-clear-models');
   await modelsNote(/default/);
+  // An impossible camera height above the floor: refused before any frame is processed.
+  await page.fill('#opt-eyeheight', '5');
+  await page.click('#btn-sample');
+  assert.match(await expectError('Wrong camera height'), /between 0\.9 and 2\.5 m/);
+  await page.fill('#opt-eyeheight', '');
   await page.screenshot({ path: join(out, 'error-message.png') });
 });
 
@@ -261,6 +266,7 @@ test('the real clip through the file input', { skip: skip || (!existsSync(KITCHE
   if (!existsSync(KITCHEN)) console.log(`# SKIP: ${KITCHEN} not found`);
   await page.fill('#opt-maxside', '640');
   await page.fill('#opt-maxframes', String(KITCHEN_FRAMES));
+  await page.fill('#opt-eyeheight', '1.7'); // reaches the ground cue (reported back when it found a level)
   const t0 = Date.now();
   await page.setInputFiles('#file-video', KITCHEN);
   await waitDone(240000);
@@ -270,6 +276,14 @@ test('the real clip through the file input', { skip: skip || (!existsSync(KITCHE
   const r = await page.evaluate(() => { const x = window.haworApp.result; return { T: x.frameCount, w: x.width, h: x.height, fx: x.intrinsics.fx }; });
   assert.equal(r.T, KITCHEN_FRAMES);
   assert.deepEqual([r.w, r.h], [640, 360]);
+  const { ground, slamOk } = await page.evaluate(() => ({ ground: window.haworApp.result.scale.ground ?? null, slamOk: window.haworApp.result.slam.initialised }));
+  if (slamOk) {
+    assert.ok(ground, 'the ground cue ran on the SLAM map');
+    if (ground.ok) assert.equal(ground.eyeHeight, 1.7);
+    else assert.ok(ground.reason, JSON.stringify(ground));
+    assert.match(await page.textContent('#summary'), /floor/);
+  }
+  await page.fill('#opt-eyeheight', '');
   await checkScene(KITCHEN_FRAMES, 'kitchen');
   await page.evaluate(() => window.haworApp.view.setFrame(20));
   await page.waitForTimeout(300);

@@ -94,7 +94,8 @@ function onWorker(m, resolveReady) {
 
 function errorText(kind, message) {
   const prefix = { mano: 'Wrong MANO file', short: 'Clip too short', nohands: 'No hands found', video: 'Unsupported or corrupt video',
-    resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem' }[kind];
+    resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem',
+    'eye-height': 'Wrong camera height' }[kind];
   return prefix ? `${prefix}: ${message}` : message;
 }
 
@@ -145,6 +146,11 @@ async function processVideo(url, name, sampleMeta = null) {
     if (focal) options.focalPx = focal * size.scale;
     else if (fov) options.fovDeg = fov;
     else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
+    const eye = number('opt-eyeheight');
+    if (eye) {
+      if (!(eye >= 0.9 && eye <= 2.5)) throw new InputError('eye-height', `The camera height above the floor must be between 0.9 and 2.5 m, not ${eye}.`);
+      options.eyeHeight = eye;
+    }
     for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };
     if (app.depth.onnx) {
       if (!app.depth.config) throw new InputError('depth', 'A depth ONNX was given without its JSON config (drop both files).');
@@ -230,11 +236,18 @@ function onResult(result, meshes) {
   ui.summary.textContent = [
     `${result.frameCount} frames, ${result.width}×${result.height}, ${result.fps} fps; focal ${result.intrinsics.fx.toFixed(1)} px (${result.intrinsics.focalSource || '?'})`,
     `left hand: ${h('left')} · right hand: ${h('right')} · camera path: ${sum.cameraPath} poses · SLAM points: ${sum.points}`,
-    `metric scale: ${result.scale ? `${Number(result.scale.scale).toFixed(3)} (${result.scale.method}, confidence ${Number(result.scale.confidence).toFixed(2)})` : '–'}`,
+    `metric scale: ${result.scale ? `${Number(result.scale.scale).toFixed(3)} (${result.scale.method}, confidence ${Number(result.scale.confidence).toFixed(2)})` : '–'}${groundText(result.scale && result.scale.ground)}`,
     result.timings ? `timings: ${Object.entries(result.timings).map(([k, v]) => `${k} ${(v / 1000).toFixed(1)} s`).join(' · ')}` : '',
     ...(result.warnings || []).map((w) => `warning: ${w}`),
   ].filter(Boolean).join('\n');
   if (result.noHands) showMessage(errorText('nohands', 'no hand was detected in any frame of this clip; the camera path is shown, the hands are empty.'));
+}
+
+/** The ground cue in words (result.scale.ground, see web/src/pipeline/run.mjs). */
+function groundText(g) {
+  if (!g) return '';
+  if (!g.ok) return ` · floor: ${g.reason}`;
+  return ` · floor cue ${g.ambiguous ? '(one level: floor or table top)' : g.surfaceHeight ? `(a surface ${g.surfaceHeight.toFixed(2)} m above it)` : ''}, camera ${g.eyeHeight} m above the floor`;
 }
 
 function countFlags(result, side, key) {

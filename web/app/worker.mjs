@@ -155,6 +155,7 @@ async function start(meta, options) {
     };
     if (options.focalPx) opts.focalPx = options.focalPx;
     if (options.fovDeg) opts.fovDeg = options.fovDeg;
+    if (options.eyeHeight) opts.eyeHeight = options.eyeHeight;
     if (options.depth) opts.depthModel = { bytes: new Uint8Array(options.depth.bytes), config: options.depth.config };
     const hooks = {
       signal: controller.signal,
