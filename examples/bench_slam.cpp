@@ -5,11 +5,12 @@
 // so the masked/unmasked comparison sees identical images and machine load.
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
-//              [--json FILE] [--dump PREFIX] [--log]
+//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
+//   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -60,7 +61,7 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false;
+  bool log = false, maskedOnly = false, turnScale = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -92,8 +93,10 @@ int main(int argc, char** argv) {
       maskedOnly = true;
     } else if (a == "--log") {
       log = true;
+    } else if (a == "--no-turn-scale") {
+      turnScale = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale]\n");
       return 2;
     }
   }
@@ -129,6 +132,7 @@ int main(int argc, char** argv) {
       hawor::PinholeCamera<double> cam = seq.camera();
       hawor::SlamOptions<double> om, ou;
       ou.useMasks = false;
+      om.turnScaleJoin = ou.turnScaleJoin = turnScale;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;

@@ -84,6 +84,7 @@
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
+#include "hawor/slam/turn_scale.hpp"
 #include "hawor/slam/two_view.hpp"
 
 namespace hawor {
@@ -148,6 +149,16 @@ struct SlamOptions {
   // 2.90 -> 5.79 %), and in fast_turns the old keyframes at the start of a turn agree with no
   // similarity (their poses are already off), so it never joins there.
   bool joinOldMap = false;
+  /// finish(): re-scale each re-initialised segment so that the eye's turn radius about the neck
+  /// (turn_scale.hpp) matches the segment before it, when both segments have turns that follow
+  /// the neck model (≥ turnScaleMinWindows windows, relative spread ≤ turnScaleMaxSpread). The
+  /// reset's scale from the median scene depth is off when the head turns to a nearer or farther
+  /// view (fast_turns seed 1: by 1.45×).
+  bool turnScaleJoin = true;
+  int turnScaleLag = 3;                       ///< frames per window
+  Scalar turnScaleMinAngleDeg = Scalar(3);    ///< a window's turn, at least
+  int turnScaleMinWindows = 8;
+  Scalar turnScaleMaxSpread = Scalar(0.35);
   int joinMinTracks = 12;                 ///< tracks with old observations agreeing with the join
   Scalar joinMaxScaleStd = Scalar(0.05);  ///< relative standard deviation of its scale, at most
   // Keyframes and mapping.
@@ -287,6 +298,7 @@ class MonoSlam {
     SlamResult<Scalar> res;
     const int n = static_cast<int>(frames_.size());
     if (n == 0) return res;
+    if (opt_.turnScaleJoin && resets_ > 0) joinSegmentsByTurns();
     if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
       std::vector<int> all(keyframes_.size());
       for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
@@ -1324,6 +1336,60 @@ class MonoSlam {
 
   /// Frames without a map pose: translation (and rotation where the rays gave none) interpolated
   /// between the nearest posed frames; held at the ends.
+  /// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
+  /// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
+  /// its scale); frames before its first keyframe (lost, not posed) are filled in later.
+  void joinSegmentsByTurns() {
+    std::vector<int> segFirstKf;  // first keyframe of each segment, in order
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) segFirstKf.push_back(static_cast<int>(k));
+    }
+    if (segFirstKf.size() < 2) return;
+    const int n = static_cast<int>(frames_.size());
+    std::vector<SE3T> T(static_cast<std::size_t>(n));
+    std::vector<char> usable(static_cast<std::size_t>(n));
+    auto gather = [&] {
+      for (int f = 0; f < n; ++f) {
+        T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
+        usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+      }
+    };
+    const Scalar minAngle = opt_.turnScaleMinAngleDeg * Scalar(M_PI / 180);
+    for (std::size_t i = 1; i < segFirstKf.size(); ++i) {
+      gather();
+      const int f0 = keyframes_[static_cast<std::size_t>(segFirstKf[i - 1])].frame;
+      const int f1 = keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+      const int f2 = i + 1 < segFirstKf.size() ? keyframes_[static_cast<std::size_t>(segFirstKf[i + 1])].frame : n;
+      const TurnRadius<Scalar> before = turnRadius(T, usable, f0, f1, opt_.turnScaleLag, minAngle);
+      const TurnRadius<Scalar> after = turnRadius(T, usable, f1, f2, opt_.turnScaleLag, minAngle);
+      const bool model = before.windows >= opt_.turnScaleMinWindows && after.windows >= opt_.turnScaleMinWindows &&
+                         before.spread <= opt_.turnScaleMaxSpread && after.spread <= opt_.turnScaleMaxSpread &&
+                         before.ok() && after.ok();
+      const Scalar k = model ? before.radius / after.radius : Scalar(1);
+      if (opt_.log) {
+        opt_.log("segment starting at frame " + std::to_string(f1) + ": turn radius " + std::to_string(double(before.radius)) +
+                 " (" + std::to_string(before.windows) + " windows, spread " + std::to_string(double(before.spread)) +
+                 ") before, " + std::to_string(double(after.radius)) + " (" + std::to_string(after.windows) +
+                 " windows, spread " + std::to_string(double(after.spread)) + ") after: " +
+                 (model && k > Scalar(1) / 3 && k < Scalar(3) ? "scaled by " + std::to_string(double(k)) : std::string("kept")));
+      }
+      if (!model || !(k > Scalar(1) / 3 && k < Scalar(3))) continue;
+      const V3 J = keyframes_[static_cast<std::size_t>(segFirstKf[i])].T.translation();
+      auto scaled = [&](const V3& x) { return V3(J + k * (x - J)); };
+      for (int f = f1; f < n; ++f) {
+        Frame& fr = frames_[static_cast<std::size_t>(f)];
+        fr.T = SE3T(fr.T.rotation(), scaled(fr.T.translation()));
+      }
+      const int seg = keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment;
+      for (Keyframe& kf : keyframes_) {
+        if (kf.segment >= seg) kf.T = SE3T(kf.T.rotation(), scaled(kf.T.translation()));
+      }
+      for (MapPoint& p : points_) {
+        if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = scaled(p.X);
+      }
+    }
+  }
+
   void fillUnposed() {
     const int n = static_cast<int>(frames_.size());
     int prev = -1;
