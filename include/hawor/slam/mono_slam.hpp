@@ -1334,8 +1334,6 @@ class MonoSlam {
     }
   }
 
-  /// Frames without a map pose: translation (and rotation where the rays gave none) interpolated
-  /// between the nearest posed frames; held at the ends.
   /// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
   /// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
   /// its scale); frames before its first keyframe (lost, not posed) are filled in later.
@@ -1390,6 +1388,8 @@ class MonoSlam {
     }
   }
 
+  /// Frames without a map pose: translation (and rotation where the rays gave none) interpolated
+  /// between the nearest posed frames; held at the ends.
   void fillUnposed() {
     const int n = static_cast<int>(frames_.size());
     int prev = -1;
