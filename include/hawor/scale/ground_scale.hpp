@@ -11,12 +11,12 @@
 //      (people hold their heads with little roll: |x_t·n| ≤ sin maxRollDeg for most frames) and
 //      within 90° of their up axes (−y_t·n > 0). Among those the one with most inliers gives u.
 //   2. Levels. The points' heights y_i = u·p_i; a level is a cluster of ≥ minLevelPoints heights
-//      below the cameras (a peak of their histogram, bin width tol, 3× above the points around). The floor is the lowest
-//      level; its plane is refitted to the points within ±tol of it (least squares: the normal is
-//      the smallest principal axis), which also refines u.
+//      below the cameras (a peak of their histogram, bin width tol, 3× above the points around).
+//      The floor is the lowest level; its plane is refitted to the points within ±tol of it
+//      (least squares: the normal is the smallest principal axis), which also refines u.
 //   3. H = median over frames of u·c_t − floor, α = eyeHeight / H.
 //   4. A second level between floor and cameras at a height fraction (y_s − floor) / H in
-//      [0.35, 0.65] is a work surface (a table top is 0.72–0.92 m under a 1.6 m eye): it confirms
+//      [0.35, 0.65] is a work surface (a table top 0.72–0.92 m high under a 1.6 m eye: 0.45–0.58): it confirms
 //      the floor. With a single level the floor cannot be told from a table top seen from above;
 //      the result is flagged `ambiguous`, carries the table-top reading as `alternativeScale`
 //      ((eyeHeight − tableHeight) / H) and half the confidence; fusion with the hand cue picks
