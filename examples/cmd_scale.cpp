@@ -8,6 +8,7 @@
 
 #include "cli_args.hpp"
 #include "commands.hpp"
+#include "hawor/geometry/camera.hpp"
 #include "hawor/io/image_file.hpp"
 #include "hawor/io/npy.hpp"
 #include "hawor/io/npz.hpp"
@@ -200,8 +201,10 @@ int cmdScale(int argc, char** argv) {
   if (args.has("intrinsics")) {
     const std::vector<double> k = args.numbers("intrinsics", 4);
     if (!(k[0] > 0) || !(k[1] > 0)) throw UsageError("--intrinsics expects fx,fy,cx,cy with fx, fy > 0");
+    hawor::PinholeCamera<double> cam;
+    cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
     for (std::size_t i = 0; i < depth.size(); ++i) {
-      const hawor::Vec3<double> xc((uv[2 * i] - k[2]) / k[0] * depth[i], (uv[2 * i + 1] - k[3]) / k[1] * depth[i], depth[i]);
+      const hawor::Vec3<double> xc = cam.unproject(hawor::Vec2<double>(uv[2 * i], uv[2 * i + 1]), depth[i]);
       mapPoints.push_back(poses[static_cast<std::size_t>(frames[static_cast<std::size_t>(kf[i])])] * xc);
     }
   }

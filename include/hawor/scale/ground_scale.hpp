@@ -75,14 +75,6 @@ struct GroundScaleResult {
 
 namespace ground_detail {
 
-template <typename Scalar>
-Scalar median(std::vector<Scalar> v) {
-  if (v.empty()) return std::numeric_limits<Scalar>::quiet_NaN();
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 /// Least-squares plane through points: centroid and unit normal (smallest principal axis).
 template <typename Scalar>
 void fitPlane(const std::vector<Vec3<Scalar>>& p, Vec3<Scalar>& centroid, Vec3<Scalar>& normal) {
@@ -105,7 +97,6 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
                                            const std::vector<SE3<Scalar>>& T_w_c,
                                            const GroundScaleOptions<Scalar>& opt = {}) {
   using V3 = Vec3<Scalar>;
-  using ground_detail::median;
   if (!(opt.eyeHeight > Scalar(0)) || !(opt.tableHeight >= Scalar(0)) || !(opt.tableHeight < opt.eyeHeight) ||
       !(opt.eyeHeightRelStd >= Scalar(0)) || !(opt.maxRollDeg > Scalar(0) && opt.maxRollDeg < Scalar(90)) ||
       !(opt.inlierFraction > Scalar(0)) || opt.ransacIterations < 1 || opt.maxPlanes < 1 || opt.minLevelPoints < 3) {

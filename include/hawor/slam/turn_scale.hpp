@@ -52,11 +52,6 @@ TurnRadius<Scalar> turnRadius(const std::vector<SE3<Scalar>>& T_w_c, const std::
   TurnRadius<Scalar> out;
   out.windows = static_cast<int>(r.size());
   if (r.empty()) return out;
-  auto median = [](std::vector<Scalar> v) {
-    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    return *mid;
-  };
   out.radius = median(r);
   std::vector<Scalar> dev;
   for (Scalar v : r) dev.push_back(std::abs(v - out.radius));
