@@ -559,7 +559,7 @@ export async function runPipeline(source, options, hooks = {}) {
     }
     let scale = { scale: NaN, method: 'none', confidence: 0 };
     const groundCue = options.groundScale ?? true;
-    const havePoints = groundCue && traj.points && traj.points.length >= 3;
+    const havePoints = groundCue && traj.points.length >= 3;
     if (traj.initialised && (wristTracks.length || depthMaps || havePoints)) {
       try {
         const masksKf = depthMaps ? Array.from(traj.keyframeDepths.frames, (f) => keptMasks[f] ?? null) : undefined;
@@ -593,18 +593,8 @@ export async function runPipeline(source, options, hooks = {}) {
       for (let a = 0; a < 3; ++a) positions[3 * t + a] = s * traj.translations[3 * t + a];
       timestamps[t] = t / fps;
     }
-    // SLAM points: the final map (cores before it was exported: the keyframe depths
-    // back-projected into the world, one point per keyframe observation)
-    const kd = traj.keyframeDepths;
-    const points = traj.points ? traj.points.map((v) => s * v) : new Float64Array(3 * kd.depth.length);
-    for (let q = 0; !traj.points && q < kd.depth.length; ++q) {
-      const f = kd.frames[kd.kf[q]];
-      const z = kd.depth[q];
-      const xc = ((kd.uv[2 * q] - Ks[2]) / Ks[0]) * z;
-      const yc = ((kd.uv[2 * q + 1] - Ks[3]) / Ks[1]) * z;
-      const R = traj.rotations.subarray(9 * f, 9 * f + 9);
-      for (let a = 0; a < 3; ++a) points[3 * q + a] = s * (R[3 * a] * xc + R[3 * a + 1] * yc + R[3 * a + 2] * z + traj.translations[3 * f + a]);
-    }
+    // SLAM points: the final map, in metres
+    const points = traj.points.map((v) => s * v);
 
     // --- world motion, infilling, joints ---
     const outHands = {};
