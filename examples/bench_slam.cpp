@@ -5,12 +5,14 @@
 // so the masked/unmasked comparison sees identical images and machine load.
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
-//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale]
+//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
-//                  estimated camera positions (estimate as output, not aligned), status, keyframe
+//                  estimated camera positions (estimate as output, not aligned), status, keyframe,
+//                  hand coverage (fraction of the image)
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
 //   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
+//   --no-reloc       SlamOptions::relocalise off (a loss always re-initialises a new segment)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -61,7 +63,7 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true;
+  bool log = false, maskedOnly = false, turnScale = true, relocalise = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -95,8 +97,10 @@ int main(int argc, char** argv) {
       log = true;
     } else if (a == "--no-turn-scale") {
       turnScale = false;
+    } else if (a == "--no-reloc") {
+      relocalise = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc]\n");
       return 2;
     }
   }
@@ -133,16 +137,19 @@ int main(int argc, char** argv) {
       hawor::SlamOptions<double> om, ou;
       ou.useMasks = false;
       om.turnScaleJoin = ou.turnScaleJoin = turnScale;
+      om.relocalise = ou.relocalise = relocalise;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;
       hawor::synth::SynthFrame<double> fr;
       std::vector<hawor::Vec3<double>> gt;
+      std::vector<double> coverage;
       int cov30 = 0;
       double maxCov = 0;
       for (int i = 0; i < n; ++i) {
         seq.renderFrame(i, fr);
         gt.push_back(fr.worldFromCamera.t);
+        coverage.push_back(fr.coverage);
         cov30 += fr.coverage >= 0.3 ? 1 : 0;
         maxCov = std::max(maxCov, fr.coverage);
         auto t0 = std::chrono::steady_clock::now();
@@ -165,10 +172,10 @@ int main(int argc, char** argv) {
         for (const auto& T : r.poses) est.push_back(T.translation());
         if (!dumpPrefix.empty()) {
           std::ofstream d(dumpPrefix + "_" + name + "_" + (m == 0 ? "masked" : "unmasked") + ".csv");
-          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe\n";
+          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe,coverage\n";
           for (std::size_t i = 0; i < est.size(); ++i) {
             d << i << ',' << gt[i](0) << ',' << gt[i](1) << ',' << gt[i](2) << ',' << est[i](0) << ',' << est[i](1) << ','
-              << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << '\n';
+              << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << ',' << coverage[i] << '\n';
           }
         }
         RunStats st;

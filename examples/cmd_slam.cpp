@@ -44,7 +44,7 @@ const char* kSlamHelp =
     "                        PnP, keyframes, losses)\n"
     "\n"
     "Prints one JSON object: frames, keyframes, tracked, interpolated, lost, relocalised,\n"
-    "losses, resets, initialised, median_ms_per_frame, p95_ms_per_frame.\n";
+    "losses, resets, relocalisations, initialised, median_ms_per_frame, p95_ms_per_frame.\n";
 
 std::vector<double> parseList(const std::string& s, const std::string& what) {
   std::vector<double> v;
@@ -175,6 +175,7 @@ int cmdSlam(int argc, char** argv) {
       .integer("relocalised", r.count(hawor::SlamStatus::Relocalised))
       .integer("losses", r.numLosses)
       .integer("resets", r.numResets)
+      .integer("relocalisations", r.numRelocalisations)
       .raw("initialised", r.initialised ? "true" : "false")
       .raw("masked", useMasks ? "true" : "false")
       .num("median_ms_per_frame", hawor::percentile(ms, 0.5))

@@ -36,14 +36,16 @@ const hawor::HandModel<double>& leftHand() {
   return l;
 }
 
-Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t seed) {
+/// `coverFrom`..`coverTo` (inclusive): frames whose mask covers the whole image (a hand over the
+/// lens), `opt` the SLAM options (useMasks is set from `masks`).
+Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t seed, int coverFrom = -1, int coverTo = -2,
+              hawor::SlamOptions<double> opt = {}) {
   hs::SynthOptions so;
   so.width = 640;
   so.height = 480;
   so.frames = frames;
   so.textureDivisor = 2;
   hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
-  hawor::SlamOptions<double> opt;
   opt.useMasks = masks;
   hawor::MonoSlam<double> slam(seq.camera(), opt);
   Run run;
@@ -52,6 +54,7 @@ Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t s
   for (int i = 0; i < seq.numFrames(); ++i) {
     seq.renderFrame(i, fr);
     run.gt.push_back(fr.worldFromCamera.t);
+    if (i >= coverFrom && i <= coverTo) std::fill(fr.images.mask.data.begin(), fr.images.mask.data.end(), 255);
     slam.process(fr.images.rgb, &fr.images.mask);
     all.push_back(fr);
     all.back().images.rgb = hawor::ImageU8();  // keep depth and mask only
@@ -139,6 +142,36 @@ TEST_CASE("MonoSlam: fast head turns, the map is built within the first turn (tu
   const double ate = ateMetres(r);
   INFO("ATE " << ate << " m over a path of " << r.path << " m");
   CHECK(ate < 0.25 * r.path);
+}
+
+TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the frames back in the map", "[slam][system]") {
+  // table_work, seed 1: frames 40-49 fully masked (no track survives: tracking is lost and the
+  // map is reset after lostFramesBeforeReset frames). When the view comes back the old map's
+  // points are found again from the kept keyframe images: the same map goes on (no new segment,
+  // so no new scale), the first pose back is Relocalised; without relocalisation a second map
+  // segment starts.
+  hawor::SlamOptions<double> on, off;
+  off.relocalise = false;
+  const Run r = runPreset("table_work", 90, true, 1, 40, 49, on);
+  const Run q = runPreset("table_work", 90, true, 1, 40, 49, off);
+  const auto& a = r.result;
+  CHECK(a.numLosses == 1);
+  CHECK(a.numRelocalisations >= 1);
+  CHECK(a.numResets == 0);
+  int back = -1;
+  for (int i = 50; i < 60 && back < 0; ++i) {
+    if (a.status[static_cast<std::size_t>(i)] == hawor::SlamStatus::Relocalised) back = i;
+  }
+  INFO("relocalised at frame " << back);
+  CHECK(back >= 50);
+  CHECK(back <= 53);
+  for (int i = 40; i < 50; ++i) CHECK(a.status[static_cast<std::size_t>(i)] == hawor::SlamStatus::Lost);
+  CHECK(a.count(hawor::SlamStatus::Tracked) >= 70);
+  CHECK(q.result.numResets >= 1);
+  CHECK(q.result.numRelocalisations == 0);
+  const double ate = ateMetres(r);
+  INFO("ATE " << ate << " m over a path of " << r.path << " m (without relocalisation " << ateMetres(q) << " m)");
+  CHECK(ate < 0.03 * r.path);
 }
 
 TEST_CASE("MonoSlam: bad input gives errors or statuses, never a crash", "[slam][system]") {

@@ -36,7 +36,14 @@
 //      Huber loss) and new corners fill the empty cells of the bucketing grid.
 //      BACK-END MASKING: a bundle-adjustment residual whose measured pixel or current projection
 //      lands on the keyframe's hand mask gets weight 0.
-//   5. Tracking loss (too few PnP inliers): the frame is Lost, its rotation still follows the
+//   5. Tracking loss (too few PnP inliers): RELOCALISATION first (relocalise, on by default):
+//      the map points of a few kept keyframes (relocKeyframes, relocSpacing frames apart) are
+//      projected under the frame's guess (rotation from the tracked rays, position held) and
+//      searched by KLT from those keyframes' images; PnP-RANSAC on them, its rotation checked
+//      against the rays', puts the frame back into the map it lost (a hand that covered the view
+//      moves away, a turn comes back), with no new scale. This is tried on every lost frame and,
+//      after the reset below, until a new map is built.
+//      Otherwise the frame is Lost, its rotation still follows the
 //      tracked rays; after lostFramesBeforeReset lost frames the system re-initialises a new map
 //      segment from the current frame and joins it to the old world: with joinOldMap (off by
 //      default) and when enough of the new two-view points were tracks seen by the old
@@ -57,7 +64,8 @@
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
-// refindKeyframes keyframes (about 1.6 MB each at 640×480); no other images.
+// refindKeyframes keyframes and, for relocalisation, of relocKeyframes keyframes (about 1.6 MB each
+// at 640×480); no other images.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -94,7 +102,7 @@ enum class SlamStatus : int {
   Tracked = 0,       ///< pose from the frame's features against the map
   Interpolated = 1,  ///< no map pose: rotation from the tracked rays or interpolation, position held/interpolated
   Lost = 2,          ///< tracking was lost here; the pose is interpolated between good frames
-  Relocalised = 3,   ///< first tracked frame of a re-initialised map segment joined to the old world
+  Relocalised = 3,   ///< put back into the lost map (relocalisation), or the first frame of a re-initialised segment
 };
 
 inline const char* slamStatusName(SlamStatus s) {
@@ -159,6 +167,20 @@ struct SlamOptions {
   Scalar turnScaleMinAngleDeg = Scalar(3);    ///< a window's turn, at least
   int turnScaleMinWindows = 8;
   Scalar turnScaleMaxSpread = Scalar(0.35);
+  // Relocalisation after a tracking loss, against the lost segment's map (on by default): the
+  // pyramids of up to relocKeyframes keyframes at least relocSpacing frames apart are kept
+  // (about 1.6 MB each at 640×480); while tracking is lost, and after the reset until a new map
+  // is built, their points are projected under the frame's guess (rotation from the tracked rays,
+  // position held) and searched by KLT from the keyframe images (within relocMaxShiftPx: the
+  // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
+  // puts the frame back in the old map, and the old segment goes on (no new scale).
+  bool relocalise = true;
+  int relocKeyframes = 10;
+  int relocSpacing = 15;
+  int relocMaxPoints = 300;
+  Scalar relocMaxShiftPx = Scalar(40);
+  int relocMinInliers = 30;
+  Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
   int joinMinTracks = 12;                 ///< tracks with old observations agreeing with the join
   Scalar joinMaxScaleStd = Scalar(0.05);  ///< relative standard deviation of its scale, at most
   // Keyframes and mapping.
@@ -211,7 +233,8 @@ struct SlamResult {
   std::vector<Vec3<Scalar>> points;   ///< final map points (world)
   int numKeyframes = 0;
   int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
-  int numResets = 0;                  ///< map re-initialisations
+  int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
+  int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
   bool initialised = false;           ///< a map was ever built (false: rotation-only output)
   PinholeCamera<Scalar> camera;       ///< the intrinsics of the output (refined when focal.changed)
   bool focalAttempted = false;        ///< SlamOptions::refineFocal ran (false: off, or no map)
@@ -347,6 +370,7 @@ class MonoSlam {
     res.numKeyframes = static_cast<int>(keyframes_.size());
     res.numLosses = losses_;
     res.numResets = resets_;
+    res.numRelocalisations = relocalisations_;
     res.initialised = everInitialised_;
     res.camera = cam_;
     res.focalAttempted = focalAttempted_;
@@ -402,6 +426,10 @@ class MonoSlam {
     CoarseMask mask;
     std::vector<int> points;  ///< map points it observes
     int segment;
+  };
+  struct KeyframePyramid {
+    int kf = -1;
+    ImagePyramid pyr;
   };
   struct Frame {
     SE3T T;
@@ -589,6 +617,7 @@ class MonoSlam {
       fr.rotationKnown = false;
     }
     fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
+    if (afterLoss_ && relocalise(f)) return;
     // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
     // tracks); in turn mode also any of the last initMaxGap frames (their tracks are in the
     // per-frame observations, their rotations from the rays): the oldest of them sharing
@@ -697,6 +726,7 @@ class MonoSlam {
     std::vector<char> linked;
     const bool joined = everInitialised_ && opt_.joinOldMap && joinToOldMap(f, tv, idx, Tref, s, linked);
     if (joined) --segment_;
+    if (!joined) relocPyr_.clear();  // a new segment: the old map is no longer the one tracked
     const int seg = segment_;
     if (!joined && everInitialised_ && lastMedianDepth_ > Scalar(0)) {
       std::vector<Scalar> d;
@@ -821,23 +851,33 @@ class MonoSlam {
     return true;
   }
 
+  /// Appends the current pyramid as keyframe k's to `store`, at most `capacity` entries (the
+  /// oldest entry's buffers reused).
+  void keepPyramid(std::vector<KeyframePyramid>& store, int capacity, int k) {
+    if (static_cast<int>(store.size()) >= capacity) {
+      KeyframePyramid old = std::move(store.front());
+      store.erase(store.begin());
+      store.push_back(std::move(old));
+    } else {
+      store.emplace_back();
+    }
+    store.back().kf = k;
+    store.back().pyr = curPyr_;
+  }
+
   /// After a keyframe's points are in: sliding-window bundle adjustment, the frame takes the
   /// adjusted pose, new corners fill the grid (their first keyframe observation is this one).
   void closeKeyframe(Frame& fr) {
     const int k = static_cast<int>(keyframes_.size()) - 1;
     adjust(lastWindow(), opt_.localIterations, false);
     fr.T = keyframes_.back().T;
-    if (opt_.refindKeyframes > 0 && keyframes_.back().frame == static_cast<int>(frames_.size()) - 1) {
-      // The current frame's pyramid, for re-finding this keyframe's points later (oldest reused).
-      if (static_cast<int>(kfPyr_.size()) >= opt_.refindKeyframes) {
-        KeyframePyramid old = std::move(kfPyr_.front());
-        kfPyr_.erase(kfPyr_.begin());
-        kfPyr_.push_back(std::move(old));
-      } else {
-        kfPyr_.emplace_back();
-      }
-      kfPyr_.back().kf = k;
-      kfPyr_.back().pyr = curPyr_;
+    const bool current = keyframes_.back().frame == static_cast<int>(frames_.size()) - 1;
+    // The current frame's pyramid, for re-finding this keyframe's points later.
+    if (opt_.refindKeyframes > 0 && current) keepPyramid(kfPyr_, opt_.refindKeyframes, k);
+    if (opt_.relocalise && opt_.relocKeyframes > 0 && current &&
+        (relocPyr_.empty() ||
+         keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.relocSpacing)) {
+      keepPyramid(relocPyr_, opt_.relocKeyframes, k);
     }
     lastKfInliers_ = countMapped();
     framesSinceKf_ = 0;
@@ -929,10 +969,8 @@ class MonoSlam {
       }
       return;
     }
-    // Lost: rotation from the rays, position held; after a few frames, a new map segment.
-    if (lost_ == 0) ++losses_;
-    ++lost_;
-    fr.status = SlamStatus::Lost;
+    // Lost: rotation from the rays, position held; relocalisation against the map; after a few
+    // frames, a new map segment.
     fr.posed = false;
     Mat3<Scalar> dR;
     const Frame& prev = frames_[static_cast<std::size_t>(f - 1)];
@@ -942,6 +980,10 @@ class MonoSlam {
       fr.T = prev.T;
       fr.rotationKnown = false;
     }
+    if (relocalise(f)) return;
+    if (lost_ == 0) ++losses_;
+    ++lost_;
+    fr.status = SlamStatus::Lost;
     if (lost_ >= opt_.lostFramesBeforeReset) {
       state_ = State::Initialising;
       afterLoss_ = true;
@@ -965,19 +1007,117 @@ class MonoSlam {
     }
   }
 
+  /// SlamOptions::relocalise: the points of the kept keyframes searched under the frame's guess
+  /// (frames_.back().T: rotation from the rays, position held), then PnP-RANSAC on every mapped
+  /// track. Success: the frame is Relocalised in the old segment (a reset without a new map is
+  /// undone) and becomes a keyframe. Failure: the tracks the search added are dropped again.
+  bool relocalise(int f) {
+    Frame& fr = frames_.back();
+    if (!opt_.relocalise || relocPyr_.empty()) return false;
+    // The guess's rotation is the rays' when the ray chain is unbroken since the last posed frame;
+    // otherwise (every track died: a hand over the lens, a black frame) it is only held.
+    bool chain = true;
+    for (int g = f; g > 0 && chain && !frames_[static_cast<std::size_t>(g)].posed; --g) {
+      chain = frames_[static_cast<std::size_t>(g)].rotationKnown;
+    }
+    const std::size_t before = tracks_.size();
+    searchMapPoints(f, relocPyr_, fr.T, opt_.relocMaxShiftPx, opt_.relocMaxPoints, "relocalisation");
+    std::vector<V3> X;
+    std::vector<V2> uv;
+    std::vector<int> ti;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      const int pid = tracks_[i].point;
+      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+      X.push_back(points_[static_cast<std::size_t>(pid)].X);
+      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
+      ti.push_back(static_cast<int>(i));
+    }
+    bool ok = false;
+    PnPRansacResult<Scalar> r;
+    if (static_cast<int>(X.size()) >= opt_.relocMinInliers) {
+      PnPRansacOptions<Scalar> po = opt_.pnp;
+      po.seed = opt_.pnp.seed + 0x5bd1e995u + static_cast<std::uint32_t>(f);
+      po.minInliers = opt_.relocMinInliers;
+      r = solvePnPRansac(X, uv, cam_, po);
+      // The rays' rotation is near-exact over a short loss: a pose that disagrees with it is a
+      // wrong match set (measured: right ones agree within 0.42°, wrong ones are 1-10° off).
+      // Without the chain, two consecutive relocalisations must agree with the rays' rotation
+      // between them instead.
+      ok = r.ok() && r.numInliers >= opt_.relocMinInliers;
+      if (ok && chain) {
+        ok = rotationAngleDeg(fr.T, r.T_w_c) <= opt_.relocMaxRotationDeg;
+      } else if (ok) {
+        const SE3T& prevGuess = frames_[static_cast<std::size_t>(f - 1)].T;
+        const bool agree = relocCandidateFrame_ == f - 1 && fr.rotationKnown &&
+                           rotationAngleDeg(SE3T(relocCandidate_.inverse() * r.T_w_c), SE3T(prevGuess.inverse() * fr.T)) <=
+                               opt_.relocMaxRotationDeg;
+        relocCandidateFrame_ = f;
+        relocCandidate_ = r.T_w_c;
+        ok = agree;
+      }
+    }
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": relocalisation: " + std::to_string(X.size()) + " mapped tracks, " +
+               std::to_string(r.ok() ? r.numInliers : 0) + " inliers" +
+               (r.ok() ? ": rotation " + std::to_string(double(rotationAngleDeg(fr.T, r.T_w_c))) + " deg from the " +
+                             (chain ? "rays'" : "held one") + ", moved " +
+                         std::to_string(double((r.T_w_c.translation() - fr.T.translation()).norm() / std::max(lastMedianDepth_, Scalar(1e-9)))) +
+                         " scene depths" + (ok ? ": relocalised" : ": rejected")
+                   : std::string()));
+    }
+    if (!ok) {
+      std::vector<char> drop(tracks_.size(), 0);
+      for (std::size_t i = before; i < tracks_.size(); ++i) drop[i] = 1;
+      removeTracks(drop);
+      return false;
+    }
+    fr.T = r.T_w_c;
+    fr.posed = true;
+    fr.inliers = r.numInliers;
+    fr.status = SlamStatus::Relocalised;
+    std::vector<char> drop(tracks_.size(), 0);
+    for (std::size_t j = 0; j < ti.size(); ++j) {
+      if (!r.inliers[j]) drop[static_cast<std::size_t>(ti[j])] = 1;
+    }
+    removeTracks(drop);
+    if (state_ == State::Initialising) {
+      // The reset built no map: the old segment goes on.
+      --resets_;
+      segment_ = keyframes_.back().segment;
+      for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
+      for (Track& t : tracks_) {
+        t.fromRef = false;
+        t.oldObs.clear();
+        t.oldPoint = -1;
+      }
+      state_ = State::Tracking;
+    }
+    afterLoss_ = false;
+    lost_ = 0;
+    ++relocalisations_;
+    insertKeyframe(f);
+    return true;
+  }
+
   /// Map points of the recent keyframes (kfPyr_) that no live track follows and that project
   /// into the frame under the predicted pose, off the hand mask: KLT from the keyframe's image at
   /// the point's observation (forward-backward checked) started at the prediction; a result
   /// within refindMaxShiftPx of it becomes a mapped track again (PnP-RANSAC then judges it). A
   /// point covered by a hand, or out of view in a turn, and seen again keeps its place in the map
   /// instead of being replaced by a new, unmapped corner.
-  void refindPoints(int f) {
-    if (kfPyr_.empty()) return;
+  void refindPoints(int f) { searchMapPoints(f, kfPyr_, predicted_, opt_.refindMaxShiftPx, opt_.refindMaxPoints, "re-finding"); }
+
+  /// The search of refindPoints over the keyframe pyramids `store` (newest first), the points
+  /// projected under `pose`, accepted within maxShiftPx of their projection; returns the number
+  /// of tracks added.
+  int searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose, Scalar maxShiftPx, int maxPoints,
+                      const char* what) {
+    if (store.empty()) return 0;
     std::vector<char> tried(points_.size(), 0);
     for (const Track& t : tracks_) {
       if (t.point >= 0) tried[static_cast<std::size_t>(t.point)] = 1;
     }
-    const SE3T Tcw = predicted_.inverse();
+    const SE3T Tcw = pose.inverse();
     const SE3T Tpw = frames_[static_cast<std::size_t>(f - 1)].T.inverse();
     const float margin = float(opt_.klt.halfWindow + 2);
     const bool withPrev = prevUv_.size() == tracks_.size();
@@ -985,11 +1125,11 @@ class MonoSlam {
     std::vector<Vec2f> from, to, guess;
     std::vector<int> pids;
     std::vector<char> ok;
-    for (auto it = kfPyr_.rbegin(); it != kfPyr_.rend() && attempts < opt_.refindMaxPoints; ++it) {
+    for (auto it = store.rbegin(); it != store.rend() && attempts < maxPoints; ++it) {
       const int k = it->kf;
       from.clear(), to.clear(), pids.clear();
       for (int pid : keyframes_[static_cast<std::size_t>(k)].points) {
-        if (attempts >= opt_.refindMaxPoints) break;
+        if (attempts >= maxPoints) break;
         if (tried[static_cast<std::size_t>(pid)]) continue;
         const MapPoint& p = points_[static_cast<std::size_t>(pid)];
         if (!p.valid) continue;
@@ -1016,7 +1156,7 @@ class MonoSlam {
       if (from.empty()) continue;
       guess = to;
       trackKlt(it->pyr, curPyr_, from, to, ok, opt_.klt);
-      const float maxShift2 = float(opt_.refindMaxShiftPx * opt_.refindMaxShiftPx);
+      const float maxShift2 = float(maxShiftPx * maxShiftPx);
       for (std::size_t i = 0; i < from.size(); ++i) {
         const float dx = to[i](0) - guess[i](0), dy = to[i](1) - guess[i](1);
         if (!ok[i] || dx * dx + dy * dy > maxShift2 || !insideImage(to[i], margin) || masked(to[i])) continue;
@@ -1036,9 +1176,10 @@ class MonoSlam {
       }
     }
     if (opt_.log && attempts > 0) {
-      opt_.log("frame " + std::to_string(f) + ": re-finding: " + std::to_string(attempts) + " map points tried, " +
+      opt_.log("frame " + std::to_string(f) + ": " + what + ": " + std::to_string(attempts) + " map points tried, " +
                std::to_string(found) + " found");
     }
+    return found;
   }
 
   int addPoint(MapPoint&& p, int trackId) {
@@ -1432,15 +1573,14 @@ class MonoSlam {
   std::vector<MapPoint> points_;
   std::vector<Keyframe> keyframes_;
   std::vector<Frame> frames_;
-  struct KeyframePyramid {
-    int kf = -1;
-    ImagePyramid pyr;
-  };
   std::vector<KeyframePyramid> kfPyr_;  ///< the last refindKeyframes keyframes' pyramids
+  std::vector<KeyframePyramid> relocPyr_;  ///< relocKeyframes keyframes' pyramids, relocSpacing apart
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
-  int lost_ = 0, losses_ = 0, resets_ = 0;
+  int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0;
+  int relocCandidateFrame_ = -1;  ///< last frame whose relocalisation waits for the next one's agreement
+  SE3T relocCandidate_;
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
   Scalar lastMedianDepth_ = Scalar(0);
