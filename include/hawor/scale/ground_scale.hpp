@@ -11,7 +11,8 @@
 //      (people hold their heads with little roll: |x_t·n| ≤ sin maxRollDeg for most frames) and
 //      within 90° of their up axes (−y_t·n > 0). Among those the one with most inliers gives u.
 //   2. Levels. The points' heights y_i = u·p_i; a level is a cluster of ≥ minLevelPoints heights
-//      below the cameras (a peak of their histogram, bin width tol, 3× above the points around).
+//      below the cameras (a peak of their histogram, bin width tol, 3× above the points around,
+//      with at least minLevelFraction of the best level's support).
 //      The floor is the lowest level; its plane is refitted to the points within ±tol of it
 //      (least squares: the normal is the smallest principal axis), which also refines u.
 //   3. H = median over frames of u·c_t − floor, α = eyeHeight / H.
@@ -55,6 +56,7 @@ struct GroundScaleOptions {
   int ransacIterations = 300;              ///< per candidate plane
   int maxPlanes = 6;                       ///< candidate planes of the sequential RANSAC
   int minLevelPoints = 12;                 ///< points that make a level (and a candidate plane)
+  Scalar minLevelFraction = Scalar(0.05);  ///< a level's support, at least this × the best level's
   std::uint32_t seed = 7;
 };
 
@@ -238,6 +240,14 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
       if (peak) window(b, &mean);
       if (peak && mean < camLow - tol) levels.emplace_back(mean, sb);
     }
+    // A surface is seen from many keyframes: a level with under minLevelFraction of the best
+    // level's support is a cluster of stray points (hands_cover seed 1: 20 points 1.7 floor
+    // heights down, beside 2178 on the floor and 2329 on the table).
+    int bestSupport = 0;
+    for (const auto& L : levels) bestSupport = std::max(bestSupport, L.second);
+    levels.erase(std::remove_if(levels.begin(), levels.end(),
+                                [&](const std::pair<Scalar, int>& L) { return Scalar(L.second) < opt.minLevelFraction * Scalar(bestSupport); }),
+                 levels.end());
     if (levels.empty()) return r.reason = "no surface below the cameras holds enough points", r;
     floorY = levels.front().first;
     std::vector<V3> floorPts;
