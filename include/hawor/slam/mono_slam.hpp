@@ -89,7 +89,6 @@
 #include "hawor/slam/hand_mask.hpp"
 #include "hawor/slam/image_pyramid.hpp"
 #include "hawor/slam/klt.hpp"
-#include "hawor/slam/neck_pivot.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
@@ -182,14 +181,6 @@ struct SlamOptions {
   Scalar relocMaxShiftPx = Scalar(40);
   int relocMinInliers = 30;
   Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
-  /// finish(): frames before the first map pose whose rotation the rays gave are placed on the
-  /// neck pivot (neck_pivot.hpp: c_t = n + R_t·o) fitted to the first neckFitFrames posed
-  /// frames, when their rotations spread by neckMinSpreadDeg and the fit's residual is at most
-  /// neckMaxRelRms of |o| (a standing turn); otherwise they keep the first pose's position.
-  bool neckLeadIn = true;
-  int neckFitFrames = 30;
-  Scalar neckMinSpreadDeg = Scalar(10);
-  Scalar neckMaxRelRms = Scalar(0.2);
   int joinMinTracks = 12;                 ///< tracks with old observations agreeing with the join
   Scalar joinMaxScaleStd = Scalar(0.05);  ///< relative standard deviation of its scale, at most
   // Keyframes and mapping.
@@ -1542,29 +1533,6 @@ class MonoSlam {
   /// between the nearest posed frames; held at the ends.
   void fillUnposed() {
     const int n = static_cast<int>(frames_.size());
-    // Frames before the first map pose (SlamOptions::neckLeadIn): on the neck pivot fitted to the
-    // first posed frames, when that model holds (neck_pivot.hpp).
-    NeckPivot<Scalar> pivot;
-    int firstPosed = 0;
-    while (firstPosed < n && !frames_[static_cast<std::size_t>(firstPosed)].posed) ++firstPosed;
-    if (opt_.neckLeadIn && firstPosed > 0 && firstPosed < n) {
-      std::vector<SE3T> T(static_cast<std::size_t>(n));
-      std::vector<char> usable(static_cast<std::size_t>(n), 0);
-      int taken = 0, end = firstPosed;
-      for (; end < n && taken < opt_.neckFitFrames; ++end) {
-        T[static_cast<std::size_t>(end)] = frames_[static_cast<std::size_t>(end)].T;
-        usable[static_cast<std::size_t>(end)] = frames_[static_cast<std::size_t>(end)].posed ? 1 : 0;
-        taken += usable[static_cast<std::size_t>(end)];
-      }
-      pivot = fitNeckPivot(T, usable, firstPosed, end, opt_.neckMinSpreadDeg);
-      if (opt_.log) {
-        opt_.log("lead-in (frames 0-" + std::to_string(firstPosed - 1) + "): neck pivot over " + std::to_string(pivot.frames) +
-                 " frames, rotation spread " + std::to_string(double(pivot.spreadDeg)) + " deg, offset " +
-                 std::to_string(double(pivot.offset.norm())) + ", residual " + std::to_string(double(pivot.rms)) +
-                 (pivot.holds(opt_.neckMaxRelRms) ? ": used" : ": not used"));
-      }
-    }
-    const bool onPivot = pivot.holds(opt_.neckMaxRelRms);
     int prev = -1;
     for (int i = 0; i < n; ++i) {
       if (frames_[static_cast<std::size_t>(i)].posed) {
@@ -1575,9 +1543,7 @@ class MonoSlam {
       while (next < n && !frames_[static_cast<std::size_t>(next)].posed) ++next;
       Frame& fr = frames_[static_cast<std::size_t>(i)];
       if (prev < 0 && next >= n) continue;  // nothing posed at all: rotation-only output
-      if (prev < 0 && onPivot && fr.rotationKnown) {
-        fr.T = SE3T(fr.T.rotation(), pivot.centre(fr.T.rotation()));
-      } else if (prev < 0) {
+      if (prev < 0) {
         fr.T = SE3T(fr.rotationKnown ? fr.T.rotation() : frames_[static_cast<std::size_t>(next)].T.rotation(),
                     frames_[static_cast<std::size_t>(next)].T.translation());
       } else if (next >= n) {
