@@ -895,6 +895,27 @@ class MonoSlam {
     return std::acos(std::max(Scalar(-1), std::min(Scalar(1), c))) * Scalar(180) / Constants<Scalar>::pi();
   }
 
+  /// The tracks that follow a map point: its position, the track's pixel, the track's index.
+  /// (A track never refers to an invalid point: cullObservations removes those tracks.)
+  void mappedTracks(std::vector<V3>& X, std::vector<V2>& uv, std::vector<int>& ti) const {
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (tracks_[i].point < 0) continue;
+      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
+      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
+      ti.push_back(static_cast<int>(i));
+    }
+  }
+
+  /// After PnP-RANSAC on mappedTracks: an outlier track has drifted off its point, so it is
+  /// dropped (a new corner replaces it).
+  void dropOutlierTracks(const std::vector<int>& ti, const std::vector<char>& inliers) {
+    std::vector<char> drop(tracks_.size(), 0);
+    for (std::size_t j = 0; j < ti.size(); ++j) {
+      if (!inliers[j]) drop[static_cast<std::size_t>(ti[j])] = 1;
+    }
+    removeTracks(drop);
+  }
+
   int countMapped() const {
     int n = 0;
     for (const Track& t : tracks_) n += t.point >= 0 ? 1 : 0;
@@ -907,12 +928,7 @@ class MonoSlam {
     std::vector<V3> X;
     std::vector<V2> uv;
     std::vector<int> ti;
-    for (std::size_t i = 0; i < tracks_.size(); ++i) {
-      if (tracks_[i].point < 0) continue;
-      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
-      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
-      ti.push_back(static_cast<int>(i));
-    }
+    mappedTracks(X, uv, ti);
     bool ok = false;
     // Rotation-checked tracking: while a head turn sweeps the map out of view, fewer than
     // minInliers map points may remain. A pose from as few as minTurnInliers is accepted when
@@ -937,12 +953,7 @@ class MonoSlam {
         ok = true;
         fr.T = r.T_w_c;
         fr.inliers = r.numInliers;
-        // An outlier track has drifted off its point: drop it (a new corner replaces it).
-        std::vector<char> drop(tracks_.size(), 0);
-        for (std::size_t j = 0; j < ti.size(); ++j) {
-          if (!r.inliers[j]) drop[static_cast<std::size_t>(ti[j])] = 1;
-        }
-        removeTracks(drop);
+        dropOutlierTracks(ti, r.inliers);
       }
     }
     if (opt_.log) {
@@ -1025,13 +1036,7 @@ class MonoSlam {
     std::vector<V3> X;
     std::vector<V2> uv;
     std::vector<int> ti;
-    for (std::size_t i = 0; i < tracks_.size(); ++i) {
-      const int pid = tracks_[i].point;
-      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
-      X.push_back(points_[static_cast<std::size_t>(pid)].X);
-      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
-      ti.push_back(static_cast<int>(i));
-    }
+    mappedTracks(X, uv, ti);
     bool ok = false;
     PnPRansacResult<Scalar> r;
     if (static_cast<int>(X.size()) >= opt_.relocMinInliers) {
@@ -1075,11 +1080,7 @@ class MonoSlam {
     fr.posed = true;
     fr.inliers = r.numInliers;
     fr.status = SlamStatus::Relocalised;
-    std::vector<char> drop(tracks_.size(), 0);
-    for (std::size_t j = 0; j < ti.size(); ++j) {
-      if (!r.inliers[j]) drop[static_cast<std::size_t>(ti[j])] = 1;
-    }
-    removeTracks(drop);
+    dropOutlierTracks(ti, r.inliers);
     if (state_ == State::Initialising) {
       // The reset built no map: the old segment goes on.
       --resets_;
@@ -1108,11 +1109,11 @@ class MonoSlam {
   void refindPoints(int f) { searchMapPoints(f, kfPyr_, predicted_, opt_.refindMaxShiftPx, opt_.refindMaxPoints, "re-finding"); }
 
   /// The search of refindPoints over the keyframe pyramids `store` (newest first), the points
-  /// projected under `pose`, accepted within maxShiftPx of their projection; returns the number
-  /// of tracks added.
-  int searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose, Scalar maxShiftPx, int maxPoints,
+  /// projected under `pose`, accepted within maxShiftPx of their projection; the found points
+  /// become mapped tracks.
+  void searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose, Scalar maxShiftPx, int maxPoints,
                       const char* what) {
-    if (store.empty()) return 0;
+    if (store.empty()) return;
     std::vector<char> tried(points_.size(), 0);
     for (const Track& t : tracks_) {
       if (t.point >= 0) tried[static_cast<std::size_t>(t.point)] = 1;
@@ -1179,7 +1180,6 @@ class MonoSlam {
       opt_.log("frame " + std::to_string(f) + ": " + what + ": " + std::to_string(attempts) + " map points tried, " +
                std::to_string(found) + " found");
     }
-    return found;
   }
 
   int addPoint(MapPoint&& p, int trackId) {
