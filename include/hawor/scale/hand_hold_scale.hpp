@@ -3,18 +3,27 @@
 //
 // With the SLAM camera-to-world rotation R_t and centre c_t (map units) and the hand's metric
 // camera-frame position h_t, the world hand is p_t(α) = x_t + α·c_t, x_t = R_t·h_t. Over a window
-// w of W consecutive frames in which the hand is still, p_t(α*) = p̄ up to the fit's noise; with
-// the window means removed (the still point is unknown),
-//   RSS_w(α) = Σ_t |x̃_t + α·c̃_t|² = xx_w + 2α·xc_w + α²·cc_w,   x̃ = x − x̄,  c̃ = c − c̄,
-// a quadratic in α, and q_w(α) = RSS_w(α) / (σ²·(3W − 3)) ≈ 1 for a still hand at the right α
-// (σ: the per-axis noise of x, estimated from the data as 1.4826·median|Δ²x| / √6, the MAD of
-// second differences, floored at minNoise). Holds are not known in advance, so α is the consensus of all windows:
+// w of W consecutive frames in which the hand is still, p_t(α*) = p_w up to the fit's noise.
+// A hand fitted in one image is far less certain along its viewing ray (depth from the hand's
+// size) than across it, so each frame's residual is weighted by its information matrix
+//   Λ_t = I/σ_⊥² + (1/σ_∥² − 1/σ_⊥²)·u_t u_tᵀ,   u_t = x_t/|x_t| (the ray in the world frame),
+// σ_∥, σ_⊥: the noise along and across the ray, each 1.4826·median|Δ²x·e| / √6 (the MAD of
+// the second differences projected on the ray, resp. on two directions across it), floored at
+// minNoise. The still point p_w is unknown; eliminating it (p_w = M⁻¹ Σ Λ_t y_t, M = Σ Λ_t,
+// y_t = x_t + α c_t) leaves a quadratic in α,
+//   RSS_w(α) = Σ y_tᵀΛ_t y_t − (Σ Λ_t y_t)ᵀ M⁻¹ (Σ Λ_t y_t) = xx_w + 2α·xc_w + α²·cc_w,
+// and q_w(α) = RSS_w(α) / (3W − 3) ≈ 1 for a still hand at the right α (a generalised least-
+// squares fit: with σ_∥ = σ_⊥ it is the plain fit with the window means removed). Holds are not
+// known in advance, so α is the consensus of all windows:
 //   α₀ = argmin_α Σ_w min(q_w(α), τ)            (a window explains at most τ; log-spaced scan)
 // which makes as many windows still as possible; windows in which the camera hardly moves cost
 // the same at every α and do not matter. Then, over the windows still at α (q_w < τ), the
 // least-squares α = −Σ xc_w / Σ cc_w, re-selecting the windows three times.
-// Standard error: σ·√(W / Σ cc_w) (each frame lies in up to W overlapping windows); the
+// Standard error: √(W / Σ cc_w) (each frame lies in up to W overlapping windows); the
 // confidence is 1 / (1 + (s.e./α / 0.05)²), zero without still windows that saw the camera move.
+// Why the weighting: with isotropic weights the depth error (several mm, and slowly varying)
+// dominates the windows; on bench_scale.py's fast_turns (short holds) the isotropic fit is
+// biased 4 % low even on the true trajectory and fails outright in some draws.
 // Limits: a hand carried by a body that moves with the camera at low frequency looks still at too
 // small an α; windows shorter than a real hold and τ ≈ 3 keep that small (bench_scale.py).
 #pragma once
@@ -57,51 +66,80 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   HandScaleResult<Scalar> res;
   res.method = "holds";
   const std::size_t T = T_w_c.size(), W = static_cast<std::size_t>(opt.window);
-  // Noise of x from second differences, and the windows' quadratics (double accumulation).
-  std::vector<double> d2;
+  // Noise of x from second differences along and across the ray, then the windows' quadratics
+  // (double accumulation).
+  std::vector<double> dRay, dAcross;
   struct Win {
     double xx, xc, cc;
   };
   std::vector<Win> wins;
-  std::vector<Eigen::Vector3d> x(T), c(T);
-  for (const HandTrack<Scalar>& H : hands) {
-    std::vector<char> ok(T);
+  // Per hand: usable frames, world-rotated positions x_t and rays u_t; the centres c_t.
+  const std::size_t H = hands.size();
+  std::vector<std::vector<char>> usable(H, std::vector<char>(T, 0));
+  std::vector<std::vector<Eigen::Vector3d>> x(H, std::vector<Eigen::Vector3d>(T)), u = x;
+  std::vector<Eigen::Vector3d> c(T);
+  for (std::size_t t = 0; t < T; ++t) c[t] = T_w_c[t].translation().template cast<double>();
+  for (std::size_t h = 0; h < H; ++h) {
     for (std::size_t t = 0; t < T; ++t) {
-      ok[t] = scale_detail::usableFrame(T_w_c, H, t);
-      if (!ok[t]) continue;
-      x[t] = (T_w_c[t].rotation() * H.positionCam[t]).template cast<double>();
-      c[t] = T_w_c[t].translation().template cast<double>();
+      if (!(usable[h][t] = scale_detail::usableFrame(T_w_c, hands[h], t))) continue;
+      x[h][t] = (T_w_c[t].rotation() * hands[h].positionCam[t]).template cast<double>();
+      const double n = x[h][t].norm();
+      u[h][t] = n > 0 ? Eigen::Vector3d(x[h][t] / n) : Eigen::Vector3d::Zero();
     }
     for (std::size_t t = 1; t + 1 < T; ++t) {
-      if (ok[t - 1] && ok[t] && ok[t + 1]) {
-        const Eigen::Vector3d a = x[t + 1] - 2 * x[t] + x[t - 1];
-        for (int k = 0; k < 3; ++k) d2.push_back(std::abs(a(k)));
-      }
+      if (!(usable[h][t - 1] && usable[h][t] && usable[h][t + 1]) || u[h][t].isZero()) continue;
+      const Eigen::Vector3d a = x[h][t + 1] - 2 * x[h][t] + x[h][t - 1];
+      // Two unit directions across the ray: any orthonormal pair (the noise is isotropic there).
+      const Eigen::Vector3d e1 = u[h][t].unitOrthogonal(), e2 = u[h][t].cross(e1);
+      dRay.push_back(std::abs(a.dot(u[h][t])));
+      dAcross.push_back(std::abs(a.dot(e1)));
+      dAcross.push_back(std::abs(a.dot(e2)));
     }
+  }
+  if (dRay.size() < 10) return res;
+  auto mad = [&](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return std::max(1.4826 * v[v.size() / 2] / std::sqrt(6.0), double(opt.minNoise));
+  };
+  const double sRay = mad(dRay), sAcross = mad(dAcross);
+  res.noiseAlongRay = Scalar(sRay);
+  res.noiseAcrossRay = Scalar(sAcross);
+  const double wAcross = 1 / (sAcross * sAcross), wRay = 1 / (sRay * sRay) - wAcross;
+  for (std::size_t h = 0; h < H; ++h) {
+    const std::vector<char>& ok = usable[h];
+    const std::vector<Eigen::Vector3d>& xh = x[h];
+    const std::vector<Eigen::Vector3d>& uh = u[h];
     std::size_t run = 0;  // usable frames ending at t
     for (std::size_t t = 0; t < T; ++t) {
       run = ok[t] ? run + 1 : 0;
       if (run < W) continue;
       const std::size_t s = t + 1 - W;
+      // Centre on the plain means first (RSS is shift-invariant: p_w absorbs it) against
+      // cancellation, then eliminate p_w with the Λ-weighted sums.
       Eigen::Vector3d xm = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
-      for (std::size_t i = s; i <= t; ++i) xm += x[i], cm += c[i];
+      for (std::size_t i = s; i <= t; ++i) xm += xh[i], cm += c[i];
       xm /= double(W), cm /= double(W);
+      Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d bx = Eigen::Vector3d::Zero(), bc = Eigen::Vector3d::Zero();
       Win w{0, 0, 0};
       for (std::size_t i = s; i <= t; ++i) {
-        const Eigen::Vector3d xt = x[i] - xm, ct = c[i] - cm;
-        w.xx += xt.squaredNorm(), w.xc += xt.dot(ct), w.cc += ct.squaredNorm();
+        const Eigen::Matrix3d L = wAcross * Eigen::Matrix3d::Identity() + wRay * uh[i] * uh[i].transpose();
+        const Eigen::Vector3d xt = xh[i] - xm, ct = c[i] - cm, Lx = L * xt, Lc = L * ct;
+        M += L, bx += Lx, bc += Lc;
+        w.xx += xt.dot(Lx), w.xc += xt.dot(Lc), w.cc += ct.dot(Lc);
       }
+      const Eigen::LDLT<Eigen::Matrix3d> Mf(M);  // M is positive definite: W frames of Λ ≻ 0
+      const Eigen::Vector3d mx = Mf.solve(bx), mc = Mf.solve(bc);
+      w.xx -= bx.dot(mx), w.xc -= bx.dot(mc), w.cc -= bc.dot(mc);
       wins.push_back(w);
     }
   }
   res.residuals = static_cast<int>(wins.size());
-  if (wins.empty() || d2.size() < 10) return res;
-  std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2), d2.end());
-  const double sigma = std::max(1.4826 * d2[d2.size() / 2] / std::sqrt(6.0), double(opt.minNoise));
+  if (wins.empty()) return res;
   double sxx = 0, scc = 0;
   for (const Win& w : wins) sxx += w.xx, scc += w.cc;
-  if (!(sigma > 0) || !(scc > 0) || !(sxx > 0)) return res;
-  const double norm = 1.0 / (sigma * sigma * double(3 * W - 3));
+  if (!(scc > 0) || !(sxx > 0)) return res;
+  const double norm = 1.0 / double(3 * W - 3);
   const double tau = double(opt.tau);
   auto q = [&](const Win& w, double a) { return (w.xx + 2 * a * w.xc + a * a * w.cc) * norm; };
   // Consensus scan.
@@ -128,7 +166,7 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   }
   res.restFrames = still;
   if (!(alpha > 0) || still < opt.minStillWindows) return res;
-  const double se = sigma * std::sqrt(double(W) / sumCc);
+  const double se = std::sqrt(double(W) / sumCc);
   res.scale = Scalar(alpha);
   res.relativeStdError = Scalar(se / alpha);
   const double e = se / alpha / 0.05;

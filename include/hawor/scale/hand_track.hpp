@@ -26,6 +26,9 @@ struct HandScaleResult {
   std::string method;    ///< "holds" or "smoothness": the cue that gave the scale
   int residuals = 0;     ///< smoothness: second-difference residuals; holds: windows examined
   int restFrames = 0;    ///< smoothness: velocity residuals of resting hands; holds: windows held
+  /// holds: the estimated noise of the hand positions along and across the viewing ray (metres)
+  Scalar noiseAlongRay = std::numeric_limits<Scalar>::quiet_NaN();
+  Scalar noiseAcrossRay = std::numeric_limits<Scalar>::quiet_NaN();
   bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
 };
 
