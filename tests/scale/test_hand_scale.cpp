@@ -263,3 +263,46 @@ TEST_CASE("hand hold scale: depth-dominated hand noise is estimated along the ra
   CHECK(errW[10] < 0.5 * errPlain[10]);
   CHECK(errW[10] < 0.005);
 }
+
+TEST_CASE("hand hold scale: a hand carried with the head does not outvote a real hold", "[scale]") {
+  // The camera translates without turning. Hand 0 is carried (fixed in the camera frame) for 100
+  // frames: still in the world only if the camera does not move (α → 0), which makes it the
+  // scan's best mode by count. Hand 1 holds still in the room for the last 50 frames. The small-α
+  // mode leaves α unconstrained; the next mode is the hold.
+  const double alpha = 0.8;
+  std::mt19937 rng(21);
+  std::normal_distribution<double> N(0, 1);
+  std::vector<hawor::SE3<double>> slam;
+  std::vector<hawor::HandTrack<double>> hands(2);
+  const hawor::SO3<double> R = hawor::SO3<double>::exp(Eigen::Vector3d(0.5, 0.1, 0.0));
+  for (int t = 0; t < 150; ++t) {
+    const double u = t / 30.0;
+    const Eigen::Vector3d cw(0.3 * u, 0.05 * std::sin(2 * u), 1.6 + 0.02 * std::sin(4 * u));
+    const hawor::SE3<double> Twc(R, cw);
+    slam.emplace_back(R, Eigen::Vector3d(cw / alpha));
+    const bool carried = t < 100, held = t >= 100;
+    hands[0].positionCam.push_back(Eigen::Vector3d(0.1, 0.2, 0.4) + 0.002 * Eigen::Vector3d(N(rng), N(rng), N(rng)));
+    hands[0].valid.push_back(carried ? 1 : 0);
+    hands[1].positionCam.push_back(Twc.inverse() * Eigen::Vector3d(1.4, 0.9, 1.0) + 0.002 * Eigen::Vector3d(N(rng), N(rng), N(rng)));
+    hands[1].valid.push_back(held ? 1 : 0);
+  }
+  hawor::HandHoldOptions<double> one;
+  one.maxModes = 1;  // the best mode only
+  const hawor::HandScaleResult<double> first = hawor::handHoldScale(slam, hands, one);
+  INFO("best mode alone: scale " << first.scale << ", rel. s.e. " << first.relativeStdError);
+  CHECK((!first.ok() || first.relativeStdError > 0.25 || std::abs(first.scale / alpha - 1) > 0.2));
+  const hawor::HandScaleResult<double> r = hawor::handHoldScale(slam, hands);
+  REQUIRE(r.ok());
+  CHECK(std::abs(r.scale / alpha - 1) < 0.02);
+  CHECK(r.relativeStdError < 0.05);
+  CHECK(r.restFrames >= 30);
+  const hawor::HandScaleResult<double> a = hawor::handAnchoredScale(slam, hands);
+  CHECK(a.method == "holds");
+  CHECK(std::abs(a.scale / alpha - 1) < 0.02);
+  hawor::HandHoldOptions<double> bad;
+  bad.maxModes = 0;
+  CHECK_THROWS_AS(hawor::handHoldScale(slam, hands, bad), hawor::Error);
+  bad = {};
+  bad.maxRelativeError = std::nan("");
+  CHECK_THROWS_AS(hawor::handHoldScale(slam, hands, bad), hawor::Error);
+}

@@ -18,7 +18,10 @@
 //   α₀ = argmin_α Σ_w min(q_w(α), τ)            (a window explains at most τ; log-spaced scan)
 // which makes as many windows still as possible; windows in which the camera hardly moves cost
 // the same at every α and do not matter. Then, over the windows still at α (q_w < τ), the
-// least-squares α = −Σ xc_w / Σ cc_w, re-selecting the windows three times.
+// least-squares α = −Σ xc_w / Σ cc_w, re-selecting the windows three times. f has several local
+// minima; they are tried best first, and the first whose fit pins α down (relative s.e. ≤ 25 %)
+// answers: the small-α mode "the camera does not move" can win the count by a hair (every hand
+// still in the camera frame is still there) but leaves α unconstrained.
 // Standard error: √(W / Σ cc_w) (each frame lies in up to W overlapping windows); the
 // confidence is 1 / (1 + (s.e./α / 0.05)²), zero without still windows that saw the camera move.
 // Why the weighting: with isotropic weights the depth error (several mm, and slowly varying)
@@ -47,6 +50,8 @@ struct HandHoldOptions {
   Scalar scanDecades = Scalar(3); ///< scan α_ref·10^±decades, α_ref = √(Σ xx / Σ cc)
   int refinements = 3;
   int minStillWindows = 3;
+  int maxModes = 8;                       ///< local minima of the scan tried, best first
+  Scalar maxRelativeError = Scalar(0.25); ///< a mode answers when its relative s.e. is at most this
   /// Floor of σ (metres): well below a fitted hand's noise (1–2 mm or more), so it never binds on
   /// real data, but noise-free input (synthetic, a camera moving on a straight line: every
   /// second difference of x is 0) still gets a scale instead of σ = 0.
@@ -60,8 +65,10 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
                                       const HandHoldOptions<Scalar>& opt = {}) {
   scale_detail::checkTracks("handHoldScale", T_w_c, hands);
   if (opt.window < 3 || !(opt.tau > Scalar(0)) || opt.scanSamples < 10 || !(opt.scanDecades > Scalar(0)) ||
-      opt.refinements < 0 || opt.minStillWindows < 1 || !(opt.minNoise > Scalar(0))) {
-    throw Error("handHoldScale: invalid options (window >= 3, tau > 0, scanSamples >= 10, minNoise > 0)");
+      opt.refinements < 0 || opt.minStillWindows < 1 || !(opt.minNoise > Scalar(0)) || opt.maxModes < 1 ||
+      !(opt.maxRelativeError > Scalar(0))) {
+    throw Error("handHoldScale: invalid options (window >= 3, tau > 0, scanSamples >= 10, minNoise > 0, maxModes >= 1, "
+                "maxRelativeError > 0)");
   }
   HandScaleResult<Scalar> res;
   res.method = "holds";
@@ -142,35 +149,61 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   const double norm = 1.0 / double(3 * W - 3);
   const double tau = double(opt.tau);
   auto q = [&](const Win& w, double a) { return (w.xx + 2 * a * w.xc + a * a * w.cc) * norm; };
-  // Consensus scan.
+  // Consensus scan: f(α_k) on the log-spaced samples, then its local minima (the first sample of
+  // a flat run), best first.
   const double ref = std::sqrt(sxx / scc), dec = double(opt.scanDecades) * std::log(10.0);
-  double best = std::numeric_limits<double>::quiet_NaN(), fbest = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < opt.scanSamples; ++k) {
-    const double a = ref * std::exp(-dec + 2 * dec * double(k) / double(opt.scanSamples - 1));
+  const int K = opt.scanSamples;
+  std::vector<double> as(static_cast<std::size_t>(K)), fs(static_cast<std::size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    const double a = ref * std::exp(-dec + 2 * dec * double(k) / double(K - 1));
     double f = 0;
     for (const Win& w : wins) f += std::min(q(w, a), tau);
-    if (f < fbest) fbest = f, best = a;
+    as[static_cast<std::size_t>(k)] = a, fs[static_cast<std::size_t>(k)] = f;
   }
-  // Least squares over the still windows, re-selected.
-  double alpha = best, sumCc = 0;
-  int still = 0;
-  for (int it = 0; it <= opt.refinements; ++it) {
-    double num = 0, den = 0;
-    still = 0;
-    for (const Win& w : wins) {
-      if (q(w, alpha) < tau) num += w.xc, den += w.cc, ++still;
+  std::vector<int> modes;
+  for (int k = 0; k < K; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    if ((k == 0 || fs[i] < fs[i - 1]) && (k == K - 1 || fs[i] <= fs[i + 1])) modes.push_back(k);
+  }
+  std::stable_sort(modes.begin(), modes.end(), [&](int l, int r) { return fs[static_cast<std::size_t>(l)] < fs[static_cast<std::size_t>(r)]; });
+  if (modes.size() > static_cast<std::size_t>(opt.maxModes)) modes.resize(static_cast<std::size_t>(opt.maxModes));
+  // Least squares over the still windows of a mode, re-selected; the first mode whose still windows
+  // pin α down (relative s.e. ≤ maxRelativeError) answers, else the best mode. A mode at too small
+  // an α, where the camera's translation hardly matters ("the camera does not move"), makes every
+  // window with a hand that is still in the camera frame look still but leaves α unconstrained.
+  bool have = false;
+  for (const int k : modes) {
+    HandScaleResult<Scalar> m = res;
+    double alpha = as[static_cast<std::size_t>(k)], sumCc = 0;
+    int still = 0;
+    bool ok = true;
+    for (int it = 0; it <= opt.refinements; ++it) {
+      double num = 0, den = 0;
+      still = 0;
+      for (const Win& w : wins) {
+        if (q(w, alpha) < tau) num += w.xc, den += w.cc, ++still;
+      }
+      if (!(den > 0)) {
+        ok = false;
+        break;
+      }
+      sumCc = den;
+      if (it < opt.refinements) alpha = -num / den;
     }
-    if (!(den > 0)) return res;
-    sumCc = den;
-    if (it < opt.refinements) alpha = -num / den;
+    if (!ok) continue;
+    m.restFrames = still;
+    if (alpha > 0 && still >= opt.minStillWindows) {
+      const double se = std::sqrt(double(W) / sumCc), e = se / alpha / 0.05;
+      m.scale = Scalar(alpha);
+      m.relativeStdError = Scalar(se / alpha);
+      m.confidence = Scalar(1.0 / (1.0 + e * e));
+    }
+    if (!have) res = m, have = true;  // the best mode, whatever its precision
+    if (m.ok() && m.relativeStdError <= opt.maxRelativeError) {
+      res = m;
+      break;
+    }
   }
-  res.restFrames = still;
-  if (!(alpha > 0) || still < opt.minStillWindows) return res;
-  const double se = std::sqrt(double(W) / sumCc);
-  res.scale = Scalar(alpha);
-  res.relativeStdError = Scalar(se / alpha);
-  const double e = se / alpha / 0.05;
-  res.confidence = Scalar(1.0 / (1.0 + e * e));
   return res;
 }
 
