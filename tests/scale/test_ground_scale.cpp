@@ -206,6 +206,11 @@ TEST_CASE("ground scale: walls only, a cloud, too few points, non-finite input: 
   hawor::GroundScaleOptions<double> bad;
   bad.tableHeight = 2.0;  // above the eye
   CHECK_THROWS_AS(hawor::groundPlaneScale(h.points, h.T_w_c, bad), hawor::Error);
+  for (double f : {-0.1, 1.5, nan}) {  // a NaN or negative fraction would turn the level filter off
+    bad = {};
+    bad.minLevelFraction = f;
+    CHECK_THROWS_AS(hawor::groundPlaneScale(h.points, h.T_w_c, bad), hawor::Error);
+  }
 }
 
 TEST_CASE("scale fusion of several cues: log-space weights, absent and zero-confidence cues", "[scale]") {

@@ -101,8 +101,9 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   using V3 = Vec3<Scalar>;
   if (!(opt.eyeHeight > Scalar(0)) || !(opt.tableHeight >= Scalar(0)) || !(opt.tableHeight < opt.eyeHeight) ||
       !(opt.eyeHeightRelStd >= Scalar(0)) || !(opt.maxRollDeg > Scalar(0) && opt.maxRollDeg < Scalar(90)) ||
-      !(opt.inlierFraction > Scalar(0)) || opt.ransacIterations < 1 || opt.maxPlanes < 1 || opt.minLevelPoints < 3) {
-    throw Error("ground scale: invalid options");
+      !(opt.inlierFraction > Scalar(0)) || opt.ransacIterations < 1 || opt.maxPlanes < 1 || opt.minLevelPoints < 3 ||
+      !(opt.minLevelFraction >= Scalar(0) && opt.minLevelFraction <= Scalar(1))) {
+    throw Error("ground scale: invalid options (eyeHeight > tableHeight >= 0, 0 < maxRollDeg < 90, minLevelFraction in [0, 1], ...)");
   }
   GroundScaleResult<Scalar> r;
   std::vector<V3> P, centres, xAxes, upAxes;
