@@ -25,6 +25,7 @@ import { createRequire } from 'node:module';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
 import { runPipeline, MAX_PIXELS } from './src/pipeline/run.mjs';
+import { eyeHeightError } from './src/pipeline/eye_height.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -59,7 +60,7 @@ export function parseArgs(argv) {
     else if (a === '--models') o.models = next();
     else if (a === '--max-frames') { o.maxFrames = num(next(), '--max-frames', 0); if (!Number.isInteger(o.maxFrames)) throw usage('--max-frames must be an integer'); }
     else if (a === '--infill') { o.infill = next(); if (!['spline', 'lerp', 'last'].includes(o.infill)) throw usage(`--infill must be spline, lerp or last, not '${o.infill}'`); }
-    else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); if (!(o.eyeHeight > 0.8 && o.eyeHeight < 3)) throw usage('--eye-height must be between 0.8 and 3 metres (the camera above the floor)'); }
+    else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); const bad = eyeHeightError(o.eyeHeight); if (bad) throw usage(`--eye-height: ${bad}`); }
     else if (a === '--no-ground-scale') o.groundScale = false;
     else if (a === '--help' || a === '-h') return { help: true };
     else if (a.startsWith('--')) throw usage(`unknown option '${a}'`);

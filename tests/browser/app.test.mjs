@@ -145,7 +145,7 @@ test('bad inputs give clear messages and the app stays usable', { skip }, async 
   // An impossible camera height above the floor: refused before any frame is processed.
   await page.fill('#opt-eyeheight', '5');
   await page.click('#btn-sample');
-  assert.match(await expectError('Wrong camera height'), /between 0\.9 and 2\.5 m/);
+  assert.match(await expectError('Wrong camera height'), /between 0\.8 and 3 m/);
   await page.fill('#opt-eyeheight', '');
   await page.screenshot({ path: join(out, 'error-message.png') });
 });

@@ -5,6 +5,7 @@ import { InputError, LIMITS, openVideo, estimateFps, processingSize, videoFrames
 import { SceneView } from './view3d.mjs';
 import { VideoOverlay } from './overlay.mjs';
 import { parseDepthConfig } from '/src/depth_model.mjs';
+import { EYE_HEIGHT_MIN, EYE_HEIGHT_MAX, eyeHeightError } from '/src/pipeline/eye_height.mjs';
 
 const $ = (id) => document.getElementById(id);
 const t0 = performance.now();
@@ -20,6 +21,9 @@ const app = {
   sample: null, frame: 0, playing: false, base: 0, hasVideo: false, lastRun: null, readyMs: null, errors: [],
 };
 window.haworApp = app;
+// The camera-height field's range is the pipeline's (eye_height.mjs), not a copy in the HTML.
+$('opt-eyeheight').min = String(EYE_HEIGHT_MIN);
+$('opt-eyeheight').max = String(EYE_HEIGHT_MAX);
 
 const scene = new SceneView($('scene'));
 const overlay = new VideoOverlay(ui.video, $('overlay-gl'), $('overlay-2d'));
@@ -148,7 +152,8 @@ async function processVideo(url, name, sampleMeta = null) {
     else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
     const eye = number('opt-eyeheight');
     if (eye) {
-      if (!(eye >= 0.9 && eye <= 2.5)) throw new InputError('eye-height', `The camera height above the floor must be between 0.9 and 2.5 m, not ${eye}.`);
+      const bad = eyeHeightError(eye);
+      if (bad) throw new InputError('eye-height', `${bad[0].toUpperCase()}${bad.slice(1)}.`);
       options.eyeHeight = eye;
     }
     for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };

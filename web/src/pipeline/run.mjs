@@ -104,6 +104,7 @@
 
 import { HandTracker } from '../perception/hand_tracker.mjs';
 import { DepthModel } from '../depth_model.mjs';
+import { eyeHeightError } from './eye_height.mjs';
 
 export const RESULT_VERSION = 1;
 /** The default diagonal field of view when the caller gives none (see README: between a phone's
@@ -260,6 +261,7 @@ export async function runPipeline(source, options, hooks = {}) {
     throw new Error(`runPipeline: frames of ${width}x${height} (${(width * height / 1e6).toFixed(1)} Mpx) exceed the limit of ${(maxPixels / 1e6).toFixed(1)} Mpx; downscale the video first (e.g. to 1920 px wide)`);
   }
   if (!(Number.isFinite(fps) && fps > 0)) throw new Error(`runPipeline: bad fps ${source.fps}`);
+  if (options.eyeHeight !== undefined && eyeHeightError(options.eyeHeight)) throw new Error(`runPipeline: ${eyeHeightError(options.eyeHeight)}`);
   if (!source.frames || typeof source.frames[Symbol.asyncIterator] !== 'function' && typeof source.frames[Symbol.iterator] !== 'function') {
     throw new Error('runPipeline: source.frames must be an (async) iterable of { index, rgba }');
   }
