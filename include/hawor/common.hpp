@@ -13,6 +13,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hawor {
@@ -80,6 +81,16 @@ Scalar median(std::vector<Scalar> v) {
   const Scalar hi = v[m];
   const Scalar lo = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m));
   return Scalar(0.5) * (lo + hi);
+}
+
+/// Robust standard deviation of the values about `centre`: 1.4826·median|v − centre| (the MAD,
+/// scaled to σ for Gaussian data); NaN when empty.
+template <typename Scalar>
+Scalar madSigma(const std::vector<Scalar>& v, Scalar centre) {
+  std::vector<Scalar> dev;
+  dev.reserve(v.size());
+  for (Scalar x : v) dev.push_back(std::abs(x - centre));
+  return Scalar(1.4826) * median(std::move(dev));
 }
 
 /// The q-quantile (q in [0, 1]) with linear interpolation between order statistics (numpy's

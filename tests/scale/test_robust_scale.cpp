@@ -192,6 +192,18 @@ TEST_CASE("common median and percentile: order statistics of shuffled data", "[s
   }
   CHECK(std::isnan(hawor::median(std::vector<float>{})));
   CHECK(hawor::percentile({}, 0.5) == 0.0);
+  // madSigma: 1.4826 × the median absolute deviation, brute force over the sorted deviations;
+  // about σ for Gaussian samples.
+  const std::vector<double> w = {3.0, -1.0, 7.5, 2.0, 2.0, 40.0};
+  std::vector<double> dev;
+  for (double x : w) dev.push_back(std::abs(x - 2.5));
+  std::sort(dev.begin(), dev.end());
+  CHECK(hawor::madSigma(w, 2.5) == Approx(1.4826 * 0.5 * (dev[2] + dev[3])));
+  std::normal_distribution<double> N(0.0, 0.3);
+  std::vector<double> g(20001);
+  for (double& x : g) x = 5.0 + N(rng);
+  CHECK(hawor::madSigma(g, 5.0) == Approx(0.3).epsilon(0.03));
+  CHECK(std::isnan(hawor::madSigma(std::vector<float>{}, 0.0f)));
 }
 
 TEMPLATE_TEST_CASE("huberLocation minimises the Huber loss (brute force)", "[scale]", float, double) {

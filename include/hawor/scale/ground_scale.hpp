@@ -269,10 +269,8 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   for (const auto& c : centres) h.push_back(up.dot(c) - floorY);
   const Scalar H = median(h);
   if (!(H > Scalar(0))) return r.reason = "the cameras are not above the floor", r;
-  std::vector<Scalar> dev;
-  for (Scalar v : h) dev.push_back(std::abs(v - H));
   r.height = H;
-  r.heightSpread = Scalar(1.4826) * median(dev) / H;
+  r.heightSpread = madSigma(h, H) / H;
   r.up = up;
   r.levels = static_cast<int>(levels.size());
   r.scale = opt.eyeHeight / H;

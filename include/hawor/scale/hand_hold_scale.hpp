@@ -104,11 +104,9 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
     }
   }
   if (dRay.size() < 10) return res;
-  auto mad = [&](std::vector<double>& v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return std::max(1.4826 * v[v.size() / 2] / std::sqrt(6.0), double(opt.minNoise));
-  };
-  const double sRay = mad(dRay), sAcross = mad(dAcross);
+  // |Δ²x·e| about 0; a second difference of white noise has 6× its variance.
+  auto noise = [&](const std::vector<double>& v) { return std::max(madSigma(v, 0.0) / std::sqrt(6.0), double(opt.minNoise)); };
+  const double sRay = noise(dRay), sAcross = noise(dAcross);
   res.noiseAlongRay = Scalar(sRay);
   res.noiseAcrossRay = Scalar(sAcross);
   const double wAcross = 1 / (sAcross * sAcross), wRay = 1 / (sRay * sRay) - wAcross;

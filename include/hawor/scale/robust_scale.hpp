@@ -226,10 +226,7 @@ template <typename Scalar>
 Scalar huberLocation(const std::vector<Scalar>& x, Scalar c = Scalar(1.345), int iterations = 100) {
   if (x.empty()) return std::numeric_limits<Scalar>::quiet_NaN();
   Scalar mu = median(x);
-  std::vector<Scalar> dev;
-  dev.reserve(x.size());
-  for (Scalar v : x) dev.push_back(std::abs(v - mu));
-  const Scalar sigma = Scalar(1.4826) * median(dev);
+  const Scalar sigma = madSigma(x, mu);
   if (!(sigma > Scalar(0))) return mu;
   for (int it = 0; it < iterations; ++it) {
     Scalar sw = 0, swx = 0;
@@ -264,9 +261,7 @@ void summarise(SequenceScale<Scalar>& out, KeyframeCombine combine = KeyframeCom
     for (Scalar s : good) logs.push_back(std::log(s));
     out.scale = std::exp(huberLocation(logs));
   }
-  std::vector<Scalar> dev;
-  for (Scalar s : good) dev.push_back(std::abs(s - mid));
-  out.relativeSpread = Scalar(1.4826) * median(dev) / mid;
+  out.relativeSpread = madSigma(good, mid) / mid;
 }
 }  // namespace scale_detail
 

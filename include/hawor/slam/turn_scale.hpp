@@ -53,9 +53,7 @@ TurnRadius<Scalar> turnRadius(const std::vector<SE3<Scalar>>& T_w_c, const std::
   out.windows = static_cast<int>(r.size());
   if (r.empty()) return out;
   out.radius = median(r);
-  std::vector<Scalar> dev;
-  for (Scalar v : r) dev.push_back(std::abs(v - out.radius));
-  out.spread = out.radius > Scalar(0) ? Scalar(1.4826) * median(dev) / out.radius : std::numeric_limits<Scalar>::infinity();
+  out.spread = out.radius > Scalar(0) ? madSigma(r, out.radius) / out.radius : std::numeric_limits<Scalar>::infinity();
   return out;
 }
 
