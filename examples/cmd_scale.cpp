@@ -243,6 +243,7 @@ int cmdScale(int argc, char** argv) {
     if (r.ground.ok()) {
       j.num("ground_scale", r.groundUsed).num("ground_confidence", r.ground.confidence).num("ground_floor_scale", r.ground.scale);
       j.integer("ground_floor_points", r.ground.floorPoints).integer("ground_levels", r.ground.levels);
+      j.num("ground_floor_width", r.ground.floorWidth);
       j.raw("ground_ambiguous", r.ground.ambiguous ? "true" : "false");
       if (std::isfinite(r.ground.surfaceHeight)) j.num("ground_surface_m", r.ground.surfaceHeight);
     } else {

@@ -642,6 +642,7 @@ val metricScale(const val& in) {
         g.set("cameraHeight", r.ground.height);  // map units
         g.set("heightSpread", r.ground.heightSpread);
         g.set("floorPoints", r.ground.floorPoints);
+        if (std::isfinite(r.ground.floorWidth)) g.set("floorWidth", r.ground.floorWidth);  // camera heights
         g.set("levels", r.ground.levels);
         g.set("ambiguous", r.ground.ambiguous);
         g.set("eyeHeight", opt.ground.eyeHeight);

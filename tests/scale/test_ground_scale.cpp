@@ -29,6 +29,7 @@ struct SceneSpec {
   double noise = 0.005, outlierFraction = 0.15;
   int frames = 120;
   int floorPoints = 250, tablePoints = 200;
+  double floorX = 4.5, floorY = 4;  ///< the floor's extent (m)
   int strayPoints = 0;  ///< a tight cluster of stray points 1 m below the floor (mistriangulated)
   std::uint32_t seed = 1;
 };
@@ -44,7 +45,7 @@ GroundScene<Scalar> makeGroundScene(const SceneSpec& s) {
   std::vector<Eigen::Vector3d> pts;
   auto jitter = [&](Eigen::Vector3d p) { return Eigen::Vector3d(p + s.noise * Eigen::Vector3d(N(rng), N(rng), N(rng))); };
   if (s.floor) {
-    for (int i = 0; i < s.floorPoints; ++i) pts.push_back(jitter({4.5 * U(rng), 4 * U(rng), 0}));
+    for (int i = 0; i < s.floorPoints; ++i) pts.push_back(jitter({s.floorX * U(rng), s.floorY * U(rng), 0}));
   }
   if (s.table) {
     for (int i = 0; i < s.tablePoints; ++i) pts.push_back(jitter({1.5 + 1.5 * U(rng), 1 + U(rng), 0.75}));
@@ -164,6 +165,41 @@ TEST_CASE("ground scale: a table top alone is ambiguous and carries the table-to
   REQUIRE(both.groundRan);
   CHECK(both.fused.method == "ground");
   CHECK(both.fused.scale == Approx(r.scale));  // no hands: the floor reading
+}
+
+TEST_CASE("ground scale: a single level too wide for a table is the floor", "[scale]") {
+  // Walking through a large room: only the floor is mapped, 8 m × 6 m. Its narrow side, 0.9 ×
+  // 6 m = 5.4 m, is 3.4 camera heights: as a table top 0.8 m below the eye it would be 2.7 m
+  // across. A 4.5 m × 4 m floor (2.25 heights, a 1.8 m "table") stays ambiguous.
+  SceneSpec spec;
+  spec.table = false, spec.walls = false, spec.outlierFraction = 0.05;
+  spec.floorX = 8, spec.floorY = 6, spec.floorPoints = 600;
+  for (std::uint32_t seed = 1; seed <= 3; ++seed) {
+    spec.seed = seed;
+    const auto g = makeGroundScene<double>(spec);
+    hawor::GroundScaleOptions<double> opt;
+    const auto r = hawor::groundPlaneScale(g.points, g.T_w_c, opt);
+    INFO("seed " << seed << " reason " << r.reason << " width " << r.floorWidth);
+    REQUIRE(r.ok());
+    CHECK(r.levels == 1);
+    // The floor's width in camera heights, against the generated floor: 5–95 % of U(0, 6 m).
+    CHECK(r.floorWidth == Approx(0.9 * 6 / 1.6).epsilon(0.1));
+    CHECK_FALSE(r.ambiguous);
+    CHECK(std::abs(r.scale / g.alpha - 1) < 0.01);
+    CHECK(r.confidence > 0.3);  // not halved
+    opt.maxSurfaceWidth = 3;    // a 3 m work surface allowed: it could be one
+    CHECK(hawor::groundPlaneScale(g.points, g.T_w_c, opt).ambiguous);
+  }
+  spec.floorX = 4.5, spec.floorY = 4, spec.floorPoints = 400;
+  const auto small = makeGroundScene<double>(spec);
+  const auto s = hawor::groundPlaneScale(small.points, small.T_w_c);
+  REQUIRE(s.ok());
+  INFO("width " << s.floorWidth);
+  CHECK(s.floorWidth == Approx(0.9 * 4 / 1.6).epsilon(0.1));
+  CHECK(s.ambiguous);
+  hawor::GroundScaleOptions<double> bad;
+  bad.maxSurfaceWidth = std::nan("");
+  CHECK_THROWS_AS(hawor::groundPlaneScale(small.points, small.T_w_c, bad), hawor::Error);
 }
 
 TEST_CASE("ground scale: walls only, a cloud, too few points, non-finite input: no scale and a reason, no throw", "[scale]") {

@@ -18,10 +18,15 @@
 //   3. H = median over frames of u·c_t − floor, α = eyeHeight / H.
 //   4. A second level between floor and cameras at a height fraction (y_s − floor) / H in
 //      [0.35, 0.65] is a work surface (a table top 0.72–0.92 m high under a 1.6 m eye: 0.45–0.58): it confirms
-//      the floor. With a single level the floor cannot be told from a table top seen from above;
-//      the result is flagged `ambiguous`, carries the table-top reading as `alternativeScale`
-//      ((eyeHeight − tableHeight) / H) and half the confidence; fusion with the hand cue picks
-//      the reading nearer to the hands' (metric_scale.hpp).
+//      the floor. With a single level the floor cannot in general be told from a table top seen
+//      from above; the result is flagged `ambiguous`, carries the table-top reading as
+//      `alternativeScale` ((eyeHeight − tableHeight) / H) and half the confidence; fusion with
+//      the hand cue picks the reading nearer to the hands' (metric_scale.hpp). Unless the level
+//      is too wide for a table: its footprint across its long axis (5–95 % of its points), in
+//      camera heights w (scale-free), read as a table top is w·(eyeHeight − tableHeight) metres
+//      across; above maxSurfaceWidth (2 m: counters are 0.6 m deep, tables and islands ≤ 1.5 m)
+//      it is the floor (walking through a room: w ≈ 3, a 2.5 m "table"; the kitchen clip's table
+//      top: w ≈ 1.6).
 // Confidence: 1 / (1 + (e / 0.05)²) with the relative error e² = eyeHeightRelStd² + (spread of
 // the per-frame heights, MAD / median)², scaled by min(1, floorPoints / 30), halved when ambiguous.
 // Limits: a sitting wearer (set eyeHeight ≈ 1.2 m), a floor never in view, a map whose scale drifts
@@ -57,6 +62,7 @@ struct GroundScaleOptions {
   int maxPlanes = 6;                       ///< candidate planes of the sequential RANSAC
   int minLevelPoints = 12;                 ///< points that make a level (and a candidate plane)
   Scalar minLevelFraction = Scalar(0.05);  ///< a level's support, at least this × the best level's
+  Scalar maxSurfaceWidth = Scalar(2);      ///< a work surface's narrow side (m), at most
   std::uint32_t seed = 7;
 };
 
@@ -71,6 +77,9 @@ struct GroundScaleResult {
   Scalar surfaceHeight = std::numeric_limits<Scalar>::quiet_NaN();  ///< work surface (m), if seen
   bool ambiguous = false;                  ///< one level only: floor or table top
   Scalar alternativeScale = std::numeric_limits<Scalar>::quiet_NaN();  ///< the table-top reading
+  /// The floor level's footprint: the 5–95 % range of its points across their long axis (their
+  /// narrower horizontal extent), in camera heights above it (scale-free).
+  Scalar floorWidth = std::numeric_limits<Scalar>::quiet_NaN();
   std::string reason;                      ///< why there is no scale (empty when ok)
   bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
 };
@@ -89,6 +98,27 @@ void fitPlane(const std::vector<Vec3<Scalar>>& p, Vec3<Scalar>& centroid, Vec3<S
   normal = es.eigenvectors().col(0).normalized();
 }
 
+/// The 5–95 % range of the points along the horizontal axis across their long axis (up: unit
+/// normal of the plane they lie in); NaN for fewer than 3 points.
+template <typename Scalar>
+Scalar narrowWidth(const std::vector<Vec3<Scalar>>& p, const Vec3<Scalar>& up) {
+  if (p.size() < 3) return std::numeric_limits<Scalar>::quiet_NaN();
+  const Vec3<Scalar> e1 = up.unitOrthogonal(), e2 = up.cross(e1);
+  Eigen::Matrix<Scalar, 2, 1> m = Eigen::Matrix<Scalar, 2, 1>::Zero();
+  for (const auto& x : p) m += Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x));
+  m /= Scalar(p.size());
+  Eigen::Matrix<Scalar, 2, 2> C = Eigen::Matrix<Scalar, 2, 2>::Zero();
+  for (const auto& x : p) {
+    const Eigen::Matrix<Scalar, 2, 1> q = Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x)) - m;
+    C += q * q.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 2, 2>> es(C);
+  const Eigen::Matrix<Scalar, 2, 1> minor = es.eigenvectors().col(0);  // smallest eigenvalue first
+  std::vector<double> a;
+  for (const auto& x : p) a.push_back(double(minor.dot(Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x)) - m)));
+  return Scalar(percentile(a, 0.95) - percentile(a, 0.05));
+}
+
 }  // namespace ground_detail
 
 /// The ground-plane scale (file comment) of a map: `points` in the world frame (map units),
@@ -102,7 +132,7 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   if (!(opt.eyeHeight > Scalar(0)) || !(opt.tableHeight >= Scalar(0)) || !(opt.tableHeight < opt.eyeHeight) ||
       !(opt.eyeHeightRelStd >= Scalar(0)) || !(opt.maxRollDeg > Scalar(0) && opt.maxRollDeg < Scalar(90)) ||
       !(opt.inlierFraction > Scalar(0)) || opt.ransacIterations < 1 || opt.maxPlanes < 1 || opt.minLevelPoints < 3 ||
-      !(opt.minLevelFraction >= Scalar(0) && opt.minLevelFraction <= Scalar(1))) {
+      !(opt.minLevelFraction >= Scalar(0) && opt.minLevelFraction <= Scalar(1)) || !(opt.maxSurfaceWidth > Scalar(0))) {
     throw Error("ground scale: invalid options (eyeHeight > tableHeight >= 0, 0 < maxRollDeg < 90, minLevelFraction in [0, 1], ...)");
   }
   GroundScaleResult<Scalar> r;
@@ -180,6 +210,7 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   // 2. Levels below the cameras along u, lowest = floor; refit the floor plane, refine u, redo.
   Scalar floorY = 0;
   std::vector<std::pair<Scalar, int>> levels;  // (height, support), ascending
+  std::vector<V3> floorLevelPts;
   for (int pass = 0; pass < 2; ++pass) {
     std::vector<Scalar> camY;
     for (const auto& c : centres) camY.push_back(up.dot(c));
@@ -256,6 +287,7 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
       if (std::abs(up.dot(p) - floorY) <= tol) floorPts.push_back(p);
     }
     r.floorPoints = static_cast<int>(floorPts.size());
+    floorLevelPts = floorPts;
     if (pass == 1 || floorPts.size() < 3) break;
     V3 centroid, n;
     ground_detail::fitPlane(floorPts, centroid, n);
@@ -274,6 +306,7 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   r.up = up;
   r.levels = static_cast<int>(levels.size());
   r.scale = opt.eyeHeight / H;
+  r.floorWidth = ground_detail::narrowWidth(floorLevelPts, up) / H;
 
   // 4. A work surface confirms the floor; one level alone is ambiguous.
   bool surface = false;
@@ -281,7 +314,8 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
     const Scalar f = (levels[k].first - floorY) / H;
     if (f >= Scalar(0.35) && f <= Scalar(0.65)) surface = true, r.surfaceHeight = f * opt.eyeHeight;
   }
-  r.ambiguous = levels.size() == 1;
+  r.ambiguous = levels.size() == 1 &&
+                !(r.floorWidth * (opt.eyeHeight - opt.tableHeight) > opt.maxSurfaceWidth);  // NaN width: ambiguous
   if (r.ambiguous) r.alternativeScale = (opt.eyeHeight - opt.tableHeight) / H;
   const Scalar e2 = opt.eyeHeightRelStd * opt.eyeHeightRelStd + r.heightSpread * r.heightSpread;
   Scalar conf = Scalar(1) / (Scalar(1) + e2 / Scalar(0.0025));
