@@ -103,19 +103,20 @@ void fitPlane(const std::vector<Vec3<Scalar>>& p, Vec3<Scalar>& centroid, Vec3<S
 template <typename Scalar>
 Scalar narrowWidth(const std::vector<Vec3<Scalar>>& p, const Vec3<Scalar>& up) {
   if (p.size() < 3) return std::numeric_limits<Scalar>::quiet_NaN();
+  using V2 = Eigen::Matrix<Scalar, 2, 1>;
   const Vec3<Scalar> e1 = up.unitOrthogonal(), e2 = up.cross(e1);
-  Eigen::Matrix<Scalar, 2, 1> m = Eigen::Matrix<Scalar, 2, 1>::Zero();
-  for (const auto& x : p) m += Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x));
+  std::vector<V2> q;  // horizontal coordinates, centred below
+  q.reserve(p.size());
+  V2 m = V2::Zero();
+  for (const auto& x : p) q.emplace_back(e1.dot(x), e2.dot(x)), m += q.back();
   m /= Scalar(p.size());
   Eigen::Matrix<Scalar, 2, 2> C = Eigen::Matrix<Scalar, 2, 2>::Zero();
-  for (const auto& x : p) {
-    const Eigen::Matrix<Scalar, 2, 1> q = Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x)) - m;
-    C += q * q.transpose();
-  }
+  for (V2& v : q) v -= m, C += v * v.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 2, 2>> es(C);
-  const Eigen::Matrix<Scalar, 2, 1> minor = es.eigenvectors().col(0);  // smallest eigenvalue first
+  const V2 minor = es.eigenvectors().col(0);  // smallest eigenvalue first
   std::vector<double> a;
-  for (const auto& x : p) a.push_back(double(minor.dot(Eigen::Matrix<Scalar, 2, 1>(e1.dot(x), e2.dot(x)) - m)));
+  a.reserve(q.size());
+  for (const V2& v : q) a.push_back(double(minor.dot(v)));
   return Scalar(percentile(a, 0.95) - percentile(a, 0.05));
 }
 
