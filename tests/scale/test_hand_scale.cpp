@@ -221,7 +221,7 @@ TEST_CASE("hand hold scale: depth-dominated hand noise is estimated along the ra
   // cue must report both levels, and its weighted fit must beat the unweighted least-squares
   // still point over the true hold windows (the estimator before the weighting), over 20 draws.
   const double alpha = 2.5, sRay = 0.008, sAcross = 0.001;
-  std::vector<double> errW, errPlain;
+  std::vector<double> errW, errPlain, along, across;
   for (std::uint32_t seed = 1; seed <= 20; ++seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> N(0, 1);
@@ -241,9 +241,12 @@ TEST_CASE("hand hold scale: depth-dominated hand noise is estimated along the ra
     const hawor::HandScaleResult<double> r = hawor::handHoldScale(slam, hands);
     REQUIRE(r.ok());
     // Second differences of a still hand seen by a moving camera are the noise's plus the
-    // rotation of the ray: the estimates are within 25 % of the injected levels.
-    CHECK(r.noiseAlongRay == Approx(sRay).epsilon(0.25));
-    CHECK(r.noiseAcrossRay == Approx(sAcross).epsilon(0.25));
+    // rotation of the ray. A MAD over ~88 differences has a relative s.e. near 18 %, so each draw
+    // is held to 50 % and the median over the draws to 12 %. (std::normal_distribution differs
+    // between libstdc++ and libc++: the draws are not the same natively and in WASM.)
+    CHECK(r.noiseAlongRay == Approx(sRay).epsilon(0.5));
+    CHECK(r.noiseAcrossRay == Approx(sAcross).epsilon(0.5));
+    along.push_back(r.noiseAlongRay), across.push_back(r.noiseAcrossRay);
     errW.push_back(std::abs(r.scale / alpha - 1));
     double num = 0, den = 0;
     for (int s0 = 0; s0 + 15 <= 90; ++s0) {
@@ -257,6 +260,11 @@ TEST_CASE("hand hold scale: depth-dominated hand noise is estimated along the ra
     }
     errPlain.push_back(std::abs(-num / den / alpha - 1));
   }
+  std::sort(along.begin(), along.end());
+  std::sort(across.begin(), across.end());
+  INFO("noise along the ray " << along.front() << " .. " << along.back() << ", across " << across.front() << " .. " << across.back());
+  CHECK(along[10] == Approx(sRay).epsilon(0.12));
+  CHECK(across[10] == Approx(sAcross).epsilon(0.12));
   std::sort(errW.begin(), errW.end());
   std::sort(errPlain.begin(), errPlain.end());
   INFO("median error weighted " << errW[10] << ", unweighted " << errPlain[10]);
