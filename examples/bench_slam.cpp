@@ -5,7 +5,8 @@
 // so the masked/unmasked comparison sees identical images and machine load.
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
-//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc]
+//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
+//              [--no-head-model] [--no-revisit]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image)
@@ -13,6 +14,9 @@
 //   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
 //   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
 //   --no-reloc       SlamOptions::relocalise off (a loss always re-initialises a new segment)
+//   --no-sequence    SlamOptions::sequenceRefine off (no full-sequence bundle adjustment)
+//   --no-head-model  SlamOptions::headModelFill off (unposed frames held / interpolated)
+//   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -63,7 +67,7 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true, relocalise = true;
+  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -99,8 +103,14 @@ int main(int argc, char** argv) {
       turnScale = false;
     } else if (a == "--no-reloc") {
       relocalise = false;
+    } else if (a == "--no-sequence") {
+      sequence = false;
+    } else if (a == "--no-head-model") {
+      headModel = false;
+    } else if (a == "--no-revisit") {
+      revisit = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit]\n");
       return 2;
     }
   }
@@ -124,8 +134,8 @@ int main(int argc, char** argv) {
       }
     }
     std::vector<RunStats> all;
-    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %5s %5s %5s %22s %6s %6s\n", "preset", "mode", "frames", "ATE[m]",
-                "ATE[%]", "path[m]", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30");
+    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %5s %5s %5s %22s %6s %6s %7s\n", "preset", "mode", "frames", "ATE[m]",
+                "ATE[%]", "path[m]", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30", "fin_ms");
     for (const std::string& name : presets) {
       hawor::synth::SynthOptions so;
       so.width = width;
@@ -138,6 +148,9 @@ int main(int argc, char** argv) {
       ou.useMasks = false;
       om.turnScaleJoin = ou.turnScaleJoin = turnScale;
       om.relocalise = ou.relocalise = relocalise;
+      om.sequenceRefine = ou.sequenceRefine = sequence;
+      om.headModelFill = ou.headModelFill = headModel;
+      om.revisitSearch = ou.revisitSearch = revisit;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;
@@ -211,9 +224,9 @@ int main(int argc, char** argv) {
         st.maxCoverage = maxCov;
         char counts[64];
         std::snprintf(counts, sizeof counts, "%d/%d/%d/%d", st.tracked, st.interpolated, st.lost, st.relocalised);
-        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f\n", name.c_str(),
+        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f %7.0f\n", name.c_str(),
                     st.mode.c_str(), n, st.ateM, st.atePct, path, st.msMedian, st.msP95, st.keyframes, st.losses,
-                    st.resets, counts, st.mb, st.coverage30);
+                    st.resets, counts, st.mb, st.coverage30, st.finishMs);
         std::fflush(stdout);
         all.push_back(st);
       }

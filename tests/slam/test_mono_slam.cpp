@@ -239,3 +239,24 @@ TEST_CASE("MonoSlam<float> runs the same pipeline", "[slam][system]") {
   REQUIRE(r.poses.size() == 30);
   for (const auto& T : r.poses) CHECK(T.translation().allFinite());
 }
+
+TEST_CASE("MonoSlam: the revisit search and the sequence refinement tighten a table-work trajectory", "[slam][system]") {
+  // table_work, seed 3 (150 frames of the suite's coarser textures): the head looks back at the
+  // same part of the table again and again. With both off the trajectory is the keyframes' map
+  // (measured: 8.5 % of the path with both off, 3.5 % on; the first frames, before a map, carry
+  // most of what is left).
+  hawor::SlamOptions<double> off;
+  off.revisitSearch = false;
+  off.sequenceRefine = false;
+  const Run on = runPreset("table_work", 150, true, 3);
+  const Run plain = runPreset("table_work", 150, true, 3, -1, -2, off);
+  const int n = static_cast<int>(on.result.poses.size());
+  CHECK(on.result.numRevisitPoints > 0);
+  CHECK(on.result.numRefinedFrames >= n * 9 / 10);
+  CHECK(plain.result.numRevisitPoints == 0);
+  CHECK(plain.result.numRefinedFrames == 0);
+  const double a = ateMetres(on), b = ateMetres(plain);
+  INFO("ATE " << a << " m with, " << b << " m without, path " << on.path << " m");
+  CHECK(a < 0.6 * b);
+  CHECK(a < 0.05 * on.path);
+}

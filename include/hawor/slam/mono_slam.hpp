@@ -15,7 +15,9 @@
 //   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
 //      between a reference frame and the current one once the median flow is large enough; the
 //      reference is the oldest of the last initMaxGap frames sharing initMinTracks tracks (their
-//      observations are kept per frame); in turn mode the pair is also tried after
+//      observations are kept per frame; new corners join whenever the tracks thin out, so that a
+//      recent reference exists while hands sweep the old tracks away); in turn mode the pair is
+//      also tried after
 //      initMinRotationDeg of rotation (the rays' rotation absorbs most of the parallax of the
 //      neck's sideways translation, so the compensated flow understates it). The rotation of
 //      not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
@@ -30,7 +32,12 @@
 //      agrees with the rays' (the map leaves the view faster than new points are made).
 //   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
 //      an absolute count, after a maximum interval, or in turn mode after keyframeMaxRotationDeg
-//      of rotation (new corners only come at keyframes). At a keyframe: new points are triangulated
+//      of rotation (new corners only come at keyframes). REVISITS first (revisitSearch, on): the
+//      points of kept keyframes (relocalisation's) of this segment that looked at the current view
+//      a while ago are searched under the current pose, and kept as tracks of those old points when
+//      a PnP on them alone agrees with the tracked pose (the head looks back at a place: the
+//      bundle adjustments tie the map to its older part instead of letting the scale drift).
+//      At a keyframe: new points are triangulated
 //      from tracks seen in two keyframes with enough parallax (triangulation.hpp), a
 //      sliding-window bundle adjustment runs (bundle_adjustment.hpp: LM, Schur complement,
 //      Huber loss) and new corners fill the empty cells of the bucketing grid.
@@ -40,7 +47,8 @@
 //      the map points of a few kept keyframes (relocKeyframes, relocSpacing frames apart) are
 //      projected under the frame's guess (rotation from the tracked rays, position held) and
 //      searched by KLT from those keyframes' images; PnP-RANSAC on them, its rotation checked
-//      against the rays', puts the frame back into the map it lost (a hand that covered the view
+//      against the rays' (or, where the ray chain disagrees, two consecutive relocalisations
+//      against the rays' rotation between them), puts the frame back into the map it lost (a hand that covered the view
 //      moves away, a turn comes back), with no new scale. This is tried on every lost frame and,
 //      after the reset below, until a new map is built.
 //      Otherwise the frame is Lost, its rotation still follows the
@@ -54,10 +62,16 @@
 //      the ray chain, position from the last estimate, scale so that the median scene depth is
 //      continuous across the join. (No place recognition: a segment that later sees the old map
 //      again is not merged with it.)
-// finish(): a global bundle adjustment over all keyframes and points (per segment: first keyframe
-// fixed, a scale prior on its first baseline), then every frame's pose re-estimated against the
-// final map from its stored 2D observations (RANSAC for frames without a tracked pose, robust LM
-// otherwise); frames that still have no pose get one interpolated between their neighbours.
+// finish(): segments re-scaled by the head's turn radius (turn_scale.hpp), a global bundle
+// adjustment over all keyframes and points (per segment: first keyframe fixed, a scale prior on
+// its first baseline), every frame's pose re-estimated against the final map from its stored 2D
+// observations (RANSAC for frames without a tracked pose, robust LM otherwise); then the
+// SEQUENCE REFINEMENT (sequence_refine.hpp, sequenceRefine, on): every frame's observations of
+// every track (a track renamed at a reset, and tracks that follow one map point, joined) in one
+// bundle adjustment, frames with a guessed position resected, ill-conditioned frames left out;
+// frames that still have no pose get their position from the HEAD MODEL fitted to the posed
+// frames around them where it explains them (head_motion.hpp: c = n + M·z, the eye in front of
+// the neck), else interpolated between their neighbours.
 // Output frame: camera-to-world poses (DESIGN §2) with the world = the first frame's camera,
 // monocular scale (the first baseline is 1 in the map's units); per-keyframe sparse depths
 // (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (DESIGN §6).
@@ -65,7 +79,9 @@
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
 // refindKeyframes keyframes and, for relocalisation, of relocKeyframes keyframes (about 1.6 MB each
-// at 640×480); no other images.
+// at 640×480); no other images. finish() holds every frame's observations grouped by track once
+// more (≈ 24 bytes an observation) and the adjustment of at most sequence.maxAdjustedFrames
+// frames.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -87,9 +103,11 @@
 #include "hawor/slam/corners.hpp"
 #include "hawor/slam/focal_refine.hpp"
 #include "hawor/slam/hand_mask.hpp"
+#include "hawor/slam/head_motion.hpp"
 #include "hawor/slam/image_pyramid.hpp"
 #include "hawor/slam/klt.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
+#include "hawor/slam/sequence_refine.hpp"
 #include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_scale.hpp"
@@ -163,6 +181,9 @@ struct SlamOptions {
   /// reset's scale from the median scene depth is off when the head turns to a nearer or farther
   /// view (fast_turns seed 1: by 1.45×).
   bool turnScaleJoin = true;
+  /// finish(), before the turn-radius join: a segment joined to the one before it by one head
+  /// model fitted to both (head_motion.hpp fitHeadJoin: scale and offset), where it explains them.
+  bool headModelJoin = true;
   int turnScaleLag = 3;                       ///< frames per window
   Scalar turnScaleMinAngleDeg = Scalar(3);    ///< a window's turn, at least
   int turnScaleMinWindows = 8;
@@ -175,6 +196,15 @@ struct SlamOptions {
   // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
   // puts the frame back in the old map, and the old segment goes on (no new scale).
   bool relocalise = true;
+  /// At each keyframe, search the kept keyframes (relocalise's) that saw the current view a while
+  /// ago (searchRevisits); needs relocalise.
+  bool revisitSearch = true;
+  int revisitMinFrames = 30;                ///< a kept keyframe this many frames old, at least
+  Scalar revisitMaxAngleDeg = Scalar(30);   ///< between its viewing direction and the current one
+  Scalar revisitMaxShiftPx = Scalar(20);    ///< found this close to the projection
+  int revisitMaxPoints = 200;
+  int revisitMinInliers = 20;
+  Scalar revisitMaxRotationDeg = Scalar(2); ///< PnP on the found points vs the tracked pose
   int relocKeyframes = 10;
   int relocSpacing = 15;
   int relocMaxPoints = 300;
@@ -197,6 +227,14 @@ struct SlamOptions {
   int globalIterations = 25;
   bool globalBundleAdjustment = true;
   bool refineFrames = true;         ///< finish(): re-estimate every frame against the final map
+  /// finish(): full-sequence bundle adjustment of every frame over every track
+  /// (sequence_refine.hpp), tracks joined across resets and relocalisations.
+  bool sequenceRefine = true;
+  SequenceRefineOptions<Scalar> sequence;
+  /// finish(): frames without a map pose placed by the head model fitted to the posed frames
+  /// around them (head_motion.hpp), where it explains them; otherwise held / interpolated.
+  bool headModelFill = true;
+  HeadModelOptions<Scalar> headModel;
   /// finish(): self-calibrate the shared focal (fx, fy by one factor, principal point fixed) in
   /// the global bundle adjustment (focal_refine.hpp: profile of the BA cost over log f, a prior
   /// toward the given focal, declined when the motion does not determine it); the per-frame
@@ -235,6 +273,9 @@ struct SlamResult {
   int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
   int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
   int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
+  int numRevisitPoints = 0;           ///< old map points found again by the revisit search
+  int numRefinedFrames = 0;           ///< frames adjusted by the sequence refinement (0: not run)
+  int numHeadModelFrames = 0;         ///< unposed frames placed by the head model
   bool initialised = false;           ///< a map was ever built (false: rotation-only output)
   PinholeCamera<Scalar> camera;       ///< the intrinsics of the output (refined when focal.changed)
   bool focalAttempted = false;        ///< SlamOptions::refineFocal ran (false: off, or no map)
@@ -321,7 +362,7 @@ class MonoSlam {
     SlamResult<Scalar> res;
     const int n = static_cast<int>(frames_.size());
     if (n == 0) return res;
-    if (opt_.turnScaleJoin && resets_ > 0) joinSegmentsByTurns();
+    if ((opt_.turnScaleJoin || opt_.headModelJoin) && resets_ > 0) joinSegmentsByTurns();
     if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
       std::vector<int> all(keyframes_.size());
       for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
@@ -330,6 +371,21 @@ class MonoSlam {
     }
     if (opt_.refineFrames && !points_.empty()) refineAllFrames();
     fillUnposed();
+    const bool sequenceDone = opt_.sequenceRefine && everInitialised_ && refineWholeSequence();
+    if (opt_.headModelFill && everInitialised_) {
+      std::vector<SE3T> T(static_cast<std::size_t>(n));
+      std::vector<char> posed(static_cast<std::size_t>(n)), rot(static_cast<std::size_t>(n));
+      std::string headLog;
+      for (int f = 0; f < n; ++f) {
+        T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
+        posed[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+        rot[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].rotationKnown;
+      }
+      const int changed = fillGapsByHeadModel(T, posed, rot, opt_.headModel, opt_.log ? &headLog : nullptr);
+      headModelFrames_ = changed;
+      for (int f = 0; f < n; ++f) frames_[static_cast<std::size_t>(f)].T = T[static_cast<std::size_t>(f)];
+      if (opt_.log) opt_.log("head model: " + std::to_string(changed) + " unposed frames placed;" + headLog);
+    }
     // Express everything in the first frame's camera.
     const SE3T T0inv = frames_[0].T.inverse();
     res.poses.resize(static_cast<std::size_t>(n));
@@ -343,11 +399,32 @@ class MonoSlam {
       res.inliers[static_cast<std::size_t>(i)] = fr.inliers;
     }
     for (const Keyframe& kf : keyframes_) res.keyframe[static_cast<std::size_t>(kf.frame)] = 1;
-    for (const MapPoint& p : points_) {
-      if (p.valid) res.points.push_back(T0inv * p.X);
+    if (sequenceDone) {
+      for (const Vec3<Scalar>& X : seqPoints_) res.points.push_back(T0inv * X);
+    } else {
+      for (const MapPoint& p : points_) {
+        if (p.valid) res.points.push_back(T0inv * p.X);
+      }
     }
     // Keyframe depths (camera z does not depend on the world frame).
-    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    if (sequenceDone) {
+      // From the refined points: each keyframe's observations of them, off its hand mask.
+      std::vector<int> kfOfFrame(static_cast<std::size_t>(n), -1);
+      for (std::size_t k = 0; k < keyframes_.size(); ++k) kfOfFrame[static_cast<std::size_t>(keyframes_[k].frame)] = static_cast<int>(k);
+      res.keyframeDepths.resize(keyframes_.size());
+      for (std::size_t k = 0; k < keyframes_.size(); ++k) res.keyframeDepths[k].frame = keyframes_[k].frame;
+      for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
+        for (const auto& o : seqPointObs_[j]) {
+          const int k = kfOfFrame[static_cast<std::size_t>(o.first)];
+          if (k < 0 || keyframes_[static_cast<std::size_t>(k)].mask.test(o.second(0), o.second(1))) continue;
+          const V3 Xc = frames_[static_cast<std::size_t>(o.first)].T.inverse() * seqPoints_[j];
+          if (!(Xc(2) > Scalar(0))) continue;
+          res.keyframeDepths[static_cast<std::size_t>(k)].uv.push_back(o.second);
+          res.keyframeDepths[static_cast<std::size_t>(k)].depth.push_back(Xc(2));
+        }
+      }
+    }
+    for (std::size_t k = 0; k < keyframes_.size() && !sequenceDone; ++k) {
       SlamKeyframeDepths<Scalar> d;
       d.frame = keyframes_[k].frame;
       const SE3T Tcw = keyframes_[k].T.inverse();
@@ -371,6 +448,9 @@ class MonoSlam {
     res.numLosses = losses_;
     res.numResets = resets_;
     res.numRelocalisations = relocalisations_;
+    res.numRevisitPoints = revisitPoints_;
+    res.numRefinedFrames = refinedFrames_;
+    res.numHeadModelFrames = headModelFrames_;
     res.initialised = everInitialised_;
     res.camera = cam_;
     res.focalAttempted = focalAttempted_;
@@ -619,10 +699,11 @@ class MonoSlam {
     fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
     if (afterLoss_ && relocalise(f)) return;
     // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
-    // tracks); in turn mode also any of the last initMaxGap frames (their tracks are in the
-    // per-frame observations, their rotations from the rays): the oldest of them sharing
-    // initMinTracks tracks. During a head turn the tracks live only a few frames, and a fixed
-    // reference would lose them all before the neck's translation gives parallax.
+    // tracks), or any of the last initMaxGap frames (their tracks are in the per-frame
+    // observations, their rotations from the rays): the oldest of them sharing initMinTracks
+    // tracks. During a head turn the tracks live only a few frames, and while hands sweep over a
+    // slowly moving view they die one by one: a fixed reference would lose them all before the
+    // motion gives parallax (hands_cover seed 7 never initialised in 300 frames).
     fr.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
     const int window = f - opt_.initMaxGap;
     if (window - 1 >= 0 && window - 1 != refFrame_) frames_[static_cast<std::size_t>(window - 1)].mask = CoarseMask();
@@ -635,7 +716,7 @@ class MonoSlam {
     std::vector<float> flow;
     for (int g = f - 1; g >= oldest; --g) {
       const Frame& rf = frames_[static_cast<std::size_t>(g)];
-      if (g != refFrame_ && (!turning_ || g < window || !rf.rotationKnown)) continue;
+      if (g != refFrame_ && (g < window || !rf.rotationKnown)) continue;
       // Common tracks: both observation lists are sorted by track id (ids only grow).
       idx.clear(), other.clear(), flow.clear();
       std::size_t a = 0;
@@ -700,8 +781,9 @@ class MonoSlam {
         return;
       }
     }
-    // Too few reference tracks left: this frame becomes the reference (new corners first). In
-    // turn mode new corners also whenever the tracks thin out.
+    // Too few reference tracks left: this frame becomes the reference (new corners first). New
+    // corners also whenever the tracks thin out (they give the later frames a reference among
+    // the recent ones).
     const int refTracks = static_cast<int>(frames_[static_cast<std::size_t>(refFrame_)].obsTrack.size());
     if (refAlive < std::max(minTracks, refTracks / 4)) {
       if (opt_.log) {
@@ -709,7 +791,7 @@ class MonoSlam {
       }
       if (refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
       setReference(f);
-    } else if (turning_ && static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10) {
+    } else if (static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10) {
       replenish();
     }
   }
@@ -1010,8 +1092,11 @@ class MonoSlam {
         if (t.oldPoint < 0) std::swap(t.oldObs, t.kfObs);
         t.point = -1;
         t.kfObs.clear();
+        const int oldId = t.id;
         t.id = static_cast<int>(trackPoint_.size());
         trackPoint_.push_back(-1);
+        trackAlias_.resize(trackPoint_.size(), -1);
+        trackAlias_.back() = oldId;
       }
       kfPyr_.clear();
       setReference(f);
@@ -1046,11 +1131,12 @@ class MonoSlam {
       r = solvePnPRansac(X, uv, cam_, po);
       // The rays' rotation is near-exact over a short loss: a pose that disagrees with it is a
       // wrong match set (measured: right ones agree within 0.42°, wrong ones are 1-10° off).
-      // Without the chain, two consecutive relocalisations must agree with the rays' rotation
-      // between them instead.
+      // Without the chain, or when the chain disagrees (its rotation drifts in a fast turn: the
+      // rays' pure-rotation fit absorbs the neck's translation, up to 1° a frame), two consecutive
+      // relocalisations must agree with the rays' rotation between them instead.
       ok = r.ok() && r.numInliers >= opt_.relocMinInliers;
-      if (ok && chain) {
-        ok = rotationAngleDeg(fr.T, r.T_w_c) <= opt_.relocMaxRotationDeg;
+      if (ok && chain && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.relocMaxRotationDeg) {
+        ok = true;
       } else if (ok) {
         const SE3T& prevGuess = frames_[static_cast<std::size_t>(f - 1)].T;
         const bool agree = relocCandidateFrame_ == f - 1 && fr.rotationKnown &&
@@ -1112,7 +1198,7 @@ class MonoSlam {
   /// projected under `pose`, accepted within maxShiftPx of their projection; the found points
   /// become mapped tracks.
   void searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose, Scalar maxShiftPx, int maxPoints,
-                      const char* what) {
+                      const char* what, const std::vector<char>* use = nullptr) {
     if (store.empty()) return;
     std::vector<char> tried(points_.size(), 0);
     for (const Track& t : tracks_) {
@@ -1127,6 +1213,7 @@ class MonoSlam {
     std::vector<int> pids;
     std::vector<char> ok;
     for (auto it = store.rbegin(); it != store.rend() && attempts < maxPoints; ++it) {
+      if (use && !(*use)[static_cast<std::size_t>(store.rend() - it - 1)]) continue;
       const int k = it->kf;
       from.clear(), to.clear(), pids.clear();
       for (int pid : keyframes_[static_cast<std::size_t>(k)].points) {
@@ -1190,7 +1277,66 @@ class MonoSlam {
     return id;
   }
 
+  /// SlamOptions::revisitSearch: the head looks back at a place it mapped a while ago (a standing
+  /// person looking around, a table worked at for minutes). The points of the kept keyframes of
+  /// this segment at least revisitMinFrames old whose view is within revisitMaxAngleDeg of the
+  /// current one are searched under the current pose (searchMapPoints); when PnP-RANSAC on the
+  /// found points alone has revisitMinInliers inliers and a rotation within revisitMaxRotationDeg
+  /// of the tracked pose, its inliers become tracks of those old points. The keyframe then
+  /// observes them: the bundle adjustments tie the current map to the old one (with the old
+  /// keyframes fixed in the local window) instead of letting the scale drift turn after turn.
+  void searchRevisits(int f) {
+    const Frame& fr = frames_.back();
+    std::vector<char> use(relocPyr_.size(), 0);
+    const V3 z = fr.T.rotationMatrix().col(2);
+    const Scalar cosMax = std::cos(opt_.revisitMaxAngleDeg * Constants<Scalar>::pi() / Scalar(180));
+    int any = 0;
+    for (std::size_t i = 0; i < relocPyr_.size(); ++i) {
+      const Keyframe& kf = keyframes_[static_cast<std::size_t>(relocPyr_[i].kf)];
+      if (kf.segment != segment_ || f - kf.frame < opt_.revisitMinFrames) continue;
+      if (V3(kf.T.rotationMatrix().col(2)).dot(z) < cosMax) continue;
+      use[i] = 1;
+      ++any;
+    }
+    if (!any) return;
+    const std::size_t before = tracks_.size();
+    searchMapPoints(f, relocPyr_, fr.T, opt_.revisitMaxShiftPx, opt_.revisitMaxPoints, "revisit", &use);
+    std::vector<V3> X;
+    std::vector<V2> uv;
+    for (std::size_t i = before; i < tracks_.size(); ++i) {
+      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
+      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
+    }
+    bool ok = false;
+    PnPRansacResult<Scalar> r;
+    if (static_cast<int>(X.size()) >= opt_.revisitMinInliers) {
+      PnPRansacOptions<Scalar> po = opt_.pnp;
+      po.seed = opt_.pnp.seed + 0x2545f491u + static_cast<std::uint32_t>(f);
+      po.minInliers = opt_.revisitMinInliers;
+      r = solvePnPRansac(X, uv, cam_, po);
+      ok = r.ok() && r.numInliers >= opt_.revisitMinInliers && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.revisitMaxRotationDeg;
+    }
+    std::vector<char> drop(tracks_.size(), 0);
+    int kept = 0;
+    for (std::size_t i = before; i < tracks_.size(); ++i) {
+      drop[i] = !ok || !r.inliers[i - before];
+      kept += drop[i] ? 0 : 1;
+    }
+    removeTracks(drop);
+    revisitPoints_ += kept;
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": revisit: " + std::to_string(X.size()) + " old points found, " +
+               std::to_string(ok ? r.numInliers : 0) + " PnP inliers" +
+               (r.ok() ? ", rotation " + std::to_string(double(rotationAngleDeg(fr.T, r.T_w_c))) + " deg from the tracked pose, moved " +
+                             std::to_string(double((r.T_w_c.translation() - fr.T.translation()).norm() / std::max(lastMedianDepth_, Scalar(1e-9)))) +
+                             " scene depths"
+                       : std::string()) +
+               (ok ? ": kept " + std::to_string(kept) : ": none kept"));
+    }
+  }
+
   void insertKeyframe(int f) {
+    if (opt_.revisitSearch && opt_.relocalise) searchRevisits(f);
     Frame& fr = frames_.back();
     const int k = static_cast<int>(keyframes_.size());
     keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_});
@@ -1475,6 +1621,104 @@ class MonoSlam {
     }
   }
 
+  /// SlamOptions::sequenceRefine: every frame's observations, with the tracks that are one
+  /// physical point joined (a track renamed at a reset, tracks that follow the same map point),
+  /// adjusted together (sequence_refine.hpp). Frames it adjusts are posed from it; the others are
+  /// left to fillUnposed. False when it found nothing to adjust.
+  bool refineWholeSequence() {
+    const int n = static_cast<int>(frames_.size());
+    const int nt = static_cast<int>(trackPoint_.size());
+    std::vector<int> parent(static_cast<std::size_t>(nt));
+    for (int i = 0; i < nt; ++i) parent[static_cast<std::size_t>(i)] = i;
+    auto find = [&](int i) {
+      while (parent[static_cast<std::size_t>(i)] != i) {
+        parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+        i = parent[static_cast<std::size_t>(i)];
+      }
+      return i;
+    };
+    auto unite = [&](int a, int b) {
+      a = find(a), b = find(b);
+      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    };
+    for (std::size_t i = 0; i < trackAlias_.size(); ++i) {
+      if (trackAlias_[i] >= 0) unite(static_cast<int>(i), trackAlias_[i]);
+    }
+    std::vector<int> firstTrack(points_.size(), -1);
+    for (int i = 0; i < nt; ++i) {
+      const int pid = trackPoint_[static_cast<std::size_t>(i)];
+      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+      if (firstTrack[static_cast<std::size_t>(pid)] < 0) {
+        firstTrack[static_cast<std::size_t>(pid)] = i;
+      } else {
+        unite(i, firstTrack[static_cast<std::size_t>(pid)]);
+      }
+    }
+    std::vector<SE3T> poses(static_cast<std::size_t>(n));
+    std::vector<char> usable(static_cast<std::size_t>(n));
+    std::vector<std::vector<TrackObservation<Scalar>>> obs(static_cast<std::size_t>(n));
+    for (int f = 0; f < n; ++f) {
+      const Frame& fr = frames_[static_cast<std::size_t>(f)];
+      poses[static_cast<std::size_t>(f)] = fr.T;
+      usable[static_cast<std::size_t>(f)] = fr.posed ? 2 : (fr.rotationKnown ? 1 : 0);
+      auto& o = obs[static_cast<std::size_t>(f)];
+      o.resize(fr.obsTrack.size());
+      for (std::size_t i = 0; i < fr.obsTrack.size(); ++i) {
+        o[i].track = find(fr.obsTrack[i]);
+        o[i].uv = V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1)));
+      }
+    }
+    const SequenceRefineResult<Scalar> r = refineSequence(cam_, poses, usable, obs, opt_.sequence);
+    if (opt_.log) {
+      int adj = 0;
+      for (char a : r.adjusted) adj += a;
+      opt_.log("sequence refinement: " + std::to_string(adj) + " of " + std::to_string(n) + " frames, " +
+               std::to_string(r.points.size()) + " points, " + std::to_string(r.observations) + " observations, rms " +
+               std::to_string(double(r.finalRmsPx)) + " px, " + std::to_string(r.iterations) + " iterations, " +
+               std::to_string(r.illConditioned) + " frames ill-conditioned");
+    }
+    if (r.points.empty()) return false;
+    for (char a : r.adjusted) refinedFrames_ += a;
+    for (int f = 0; f < n; ++f) {
+      Frame& fr = frames_[static_cast<std::size_t>(f)];
+      if (r.adjusted[static_cast<std::size_t>(f)]) {
+        fr.T = r.poses[static_cast<std::size_t>(f)];
+        fr.posed = true;
+        fr.rotationKnown = true;
+        if (fr.status == SlamStatus::Interpolated) fr.status = SlamStatus::Tracked;
+      } else if (r.carried[static_cast<std::size_t>(f)] && fr.inliers >= 2 * opt_.minInliers) {
+        // Tracked on plenty of points but not adjusted (a long sequence is subsampled): its pose
+        // moves with its neighbours'. A weakly tracked one (a head turn running out of map) is
+        // left to the gap filling below.
+        fr.T = r.poses[static_cast<std::size_t>(f)];
+      } else {
+        fr.posed = false;
+        if (fr.status == SlamStatus::Tracked) fr.status = SlamStatus::Interpolated;
+      }
+    }
+    fillUnposed();
+    seqPoints_ = r.points;
+    seqPointObs_ = r.pointObs;
+    return true;
+  }
+
+  /// Applies the position map `g` (a similarity without rotation) to the frames from f1 on, the
+  /// keyframes of segment `seg` and later ones, and their points (later segments continue its
+  /// scale).
+  template <typename G>
+  void transformFrom(int f1, int seg, const G& g) {
+    for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) {
+      Frame& fr = frames_[f];
+      fr.T = SE3T(fr.T.rotation(), g(V3(fr.T.translation())));
+    }
+    for (Keyframe& kf : keyframes_) {
+      if (kf.segment >= seg) kf.T = SE3T(kf.T.rotation(), g(V3(kf.T.translation())));
+    }
+    for (MapPoint& p : points_) {
+      if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
+    }
+  }
+
   /// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
   /// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
   /// its scale); frames before its first keyframe (lost, not posed) are filled in later.
@@ -1499,6 +1743,30 @@ class MonoSlam {
       const int f0 = keyframes_[static_cast<std::size_t>(segFirstKf[i - 1])].frame;
       const int f1 = keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
       const int f2 = i + 1 < segFirstKf.size() ? keyframes_[static_cast<std::size_t>(segFirstKf[i + 1])].frame : n;
+      if (opt_.headModelJoin) {
+        // One head model for both segments (head_motion.hpp): B's positions into A's units.
+        std::vector<int> idxA, idxB;
+        for (int f = std::max(f0, f1 - opt_.headModel.window); f < f1; ++f) {
+          if (usable[static_cast<std::size_t>(f)]) idxA.push_back(f);
+        }
+        for (int f = f1; f < std::min(f2, f1 + opt_.headModel.window); ++f) {
+          if (usable[static_cast<std::size_t>(f)]) idxB.push_back(f);
+        }
+        const HeadJoin<Scalar> hj = fitHeadJoin(T, idxA, idxB, opt_.headModel);
+        if (opt_.log) {
+          opt_.log("segment starting at frame " + std::to_string(f1) + ": head model over " + std::to_string(idxA.size()) + " + " +
+                   std::to_string(idxB.size()) + " frames: scale " + std::to_string(double(hj.s)) + ", R2 " +
+                   std::to_string(double(hj.fit.r2)) + ", motion R2 " + std::to_string(double(hj.fit.motionR2)) + ", front " +
+                   std::to_string(double(hj.fit.frontCos)) + ", radius spread " + std::to_string(double(hj.fit.radiusSpread)) +
+                   ", view spreads " + std::to_string(double(hj.spreadA)) + "/" + std::to_string(double(hj.spreadB)) + " deg" +
+                   (hj.ok ? ": joined" : ": not used"));
+        }
+        if (hj.ok) {
+          transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(hj.s * x + hj.t); });
+          continue;
+        }
+      }
+      if (!opt_.turnScaleJoin) continue;
       const TurnRadius<Scalar> before = turnRadius(T, usable, f0, f1, opt_.turnScaleLag, minAngle);
       const TurnRadius<Scalar> after = turnRadius(T, usable, f1, f2, opt_.turnScaleLag, minAngle);
       const bool model = before.windows >= opt_.turnScaleMinWindows && after.windows >= opt_.turnScaleMinWindows &&
@@ -1514,18 +1782,7 @@ class MonoSlam {
       }
       if (!model || !(k > Scalar(1) / 3 && k < Scalar(3))) continue;
       const V3 J = keyframes_[static_cast<std::size_t>(segFirstKf[i])].T.translation();
-      auto scaled = [&](const V3& x) { return V3(J + k * (x - J)); };
-      for (int f = f1; f < n; ++f) {
-        Frame& fr = frames_[static_cast<std::size_t>(f)];
-        fr.T = SE3T(fr.T.rotation(), scaled(fr.T.translation()));
-      }
-      const int seg = keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment;
-      for (Keyframe& kf : keyframes_) {
-        if (kf.segment >= seg) kf.T = SE3T(kf.T.rotation(), scaled(kf.T.translation()));
-      }
-      for (MapPoint& p : points_) {
-        if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = scaled(p.X);
-      }
+      transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(J + k * (x - J)); });
     }
   }
 
@@ -1576,9 +1833,12 @@ class MonoSlam {
   std::vector<KeyframePyramid> kfPyr_;  ///< the last refindKeyframes keyframes' pyramids
   std::vector<KeyframePyramid> relocPyr_;  ///< relocKeyframes keyframes' pyramids, relocSpacing apart
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
+  std::vector<Vec3<Scalar>> seqPoints_;  ///< finish(): the sequence refinement's points (world)
+  std::vector<std::vector<std::pair<int, Vec2<Scalar>>>> seqPointObs_;  ///< and their (frame, pixel) observations
+  std::vector<int> trackAlias_;  ///< track id → the id the same track had before a reset (−1: none; may be short)
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
-  int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0;
+  int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0, revisitPoints_ = 0, refinedFrames_ = 0, headModelFrames_ = 0;
   int relocCandidateFrame_ = -1;  ///< last frame whose relocalisation waits for the next one's agreement
   SE3T relocCandidate_;
   bool afterLoss_ = false, everInitialised_ = false;

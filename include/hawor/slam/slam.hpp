@@ -1,7 +1,8 @@
 // hawor/slam/slam.hpp — the SLAM module (issue 4, DESIGN §5): front end (pyramid, hand masks,
 // Shi–Tomasi corners with bucketing, pyramidal KLT), minimal solvers and robust estimation
 // (RANSAC, 5-point essential, homography, P3P, PnP-RANSAC, triangulation, two-view
-// initialisation), sparse bundle adjustment, and the monocular SLAM system with dual hand masking.
+// initialisation), sparse bundle adjustment, the full-sequence refinement, the head model of a
+// standing wearer, and the monocular SLAM system with dual hand masking.
 #pragma once
 
 #include "image_pyramid.hpp"
@@ -16,4 +17,6 @@
 #include "two_view.hpp"
 #include "pnp_ransac.hpp"
 #include "bundle_adjustment.hpp"
+#include "sequence_refine.hpp"
+#include "head_motion.hpp"
 #include "mono_slam.hpp"

@@ -75,7 +75,8 @@
 //                 estimated), focalEstimateFx (the SLAM's estimate even when not applied, null
 //                 when none), focalReason (why refined / kept / declined), focalPasses (2: the
 //                 SLAM ran again with the refined focal) },
-//   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, initialised },
+//   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, numRevisitPoints,
+//           numRefinedFrames, numHeadModelFrames, initialised },
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
@@ -648,7 +649,8 @@ export async function runPipeline(source, options, hooks = {}) {
       threads: options.threads ?? 1,
       intrinsics: intrOut,
       slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
-        numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, initialised: traj.initialised },
+        numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, numRevisitPoints: traj.numRevisitPoints,
+        numRefinedFrames: traj.numRefinedFrames, numHeadModelFrames: traj.numHeadModelFrames, initialised: traj.initialised },
       camera: { positions, quaternions, status: traj.status, timestamps },
       points,
       scale,
