@@ -2,6 +2,7 @@
 // (include/hawor/slam/mono_slam.hpp). Reads the images in name order, masks of the same names.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -21,7 +22,7 @@ namespace {
 const char* kSlamHelp =
     "usage: hawor slam --images DIR --intrinsics fx,fy,cx,cy [--masks DIR] [--no-mask]\n"
     "                  --out TRAJ.tum [--keyframe-depths KD.npz] [--stats STATS.json]\n"
-    "                  [--fps F] [--max-frames N] [--verbose]\n"
+    "                  [--fps F] [--max-frames N] [--refine-focal [--focal-prior S]] [--verbose]\n"
     "\n"
     "Sparse monocular SLAM (KLT tracks, PnP, keyframes, sliding-window and global bundle\n"
     "adjustment) with the hands masked out of the front end and the bundle adjustment.\n"
@@ -40,11 +41,17 @@ const char* kSlamHelp =
     "                        keyframe flags, PnP inliers and ms, plus totals\n"
     "  --fps F               timestamps (default 30)\n"
     "  --max-frames N        only the first N frames\n"
+    "  --refine-focal        self-calibrate the focal (fx, fy by one factor) in the final bundle\n"
+    "                        adjustment where the motion determines it; the --intrinsics focal\n"
+    "                        is the guess (the trajectory then uses the refined focal)\n"
+    "  --focal-prior S       std of log(f / guess) of the guess (default 0.3, a FOV guess)\n"
     "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
     "                        PnP, keyframes, losses)\n"
     "\n"
     "Prints one JSON object: frames, keyframes, tracked, interpolated, lost, relocalised,\n"
-    "losses, resets, relocalisations, initialised, median_ms_per_frame, p95_ms_per_frame.\n";
+    "losses, resets, relocalisations, initialised, median_ms_per_frame, p95_ms_per_frame, and\n"
+    "with --refine-focal: focal_fx (the focal used), focal_guess_fx, focal_refined, focal_std\n"
+    "(posterior std of log f, null when declined) and focal_reason.\n";
 
 std::vector<double> parseList(const std::string& s, const std::string& what) {
   std::vector<double> v;
@@ -70,8 +77,8 @@ bool fileExists(const std::string& p) {
 
 int cmdSlam(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"images", "intrinsics", "masks", "out", "keyframe-depths", "stats", "fps", "max-frames"},
-                  {"no-mask", "verbose"});
+                  {"images", "intrinsics", "masks", "out", "keyframe-depths", "stats", "fps", "max-frames", "focal-prior"},
+                  {"no-mask", "verbose", "refine-focal"});
   if (args.help()) {
     std::fputs(kSlamHelp, stdout);
     return 0;
@@ -97,6 +104,12 @@ int cmdSlam(int argc, char** argv) {
   cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
   hawor::SlamOptions<double> opt;
   opt.useMasks = useMasks;
+  opt.refineFocal = args.flag("refine-focal");
+  if (args.has("focal-prior")) {
+    if (!opt.refineFocal) throw UsageError("--focal-prior needs --refine-focal");
+    opt.focal.priorSigmaLog = args.number("focal-prior", 0.3);
+    if (!(opt.focal.priorSigmaLog > 0)) throw UsageError("--focal-prior must be > 0");
+  }
   const bool verbose = args.flag("verbose");
   if (verbose) opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };
   hawor::MonoSlam<double> slam(cam, opt);
@@ -183,6 +196,13 @@ int cmdSlam(int argc, char** argv) {
       .raw("masked", useMasks ? "true" : "false")
       .num("median_ms_per_frame", hawor::percentile(ms, 0.5))
       .num("p95_ms_per_frame", hawor::percentile(ms, 0.95));
+  if (opt.refineFocal) {
+    j.num("focal_fx", r.camera.fx)
+        .num("focal_guess_fx", r.focal.guessFx)
+        .raw("focal_refined", r.focal.changed ? "true" : "false")
+        .num("focal_std", r.focal.accepted ? double(r.focal.stdLog) : std::nan(""))
+        .str("focal_reason", r.focal.reason);
+  }
   if (args.has("stats")) {
     std::string s = "{\"summary\": " + j.dump() + ", \"status\": [";
     for (std::size_t i = 0; i < r.status.size(); ++i) s += std::string(i ? ", " : "") + "\"" + hawor::slamStatusName(r.status[i]) + "\"";

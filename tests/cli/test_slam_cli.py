@@ -2,7 +2,7 @@
 without masks; the trajectory against the ground truth (Sim(3) Umeyama written here in numpy,
 mean error as in DESIGN section 8), the TUM layout (first pose the identity, timestamps frame/fps),
 the keyframe-depth npz against the rendered depth maps (up to the same Sim(3) scale), the stats
-JSON; and bad input: a missing folder, too few frames, a corrupt image, frames of different sizes,
+JSON, --refine-focal from a wrong and a right guess; and bad input: a missing folder, too few frames, a corrupt image, frames of different sizes,
 a mask of the wrong size, bad intrinsics (clear message, exit code 1 or 2, no crash).
 Run: /usr/bin/python3 test_slam_cli.py path/to/hawor
 """
@@ -101,6 +101,24 @@ def main():
             check(mode + " kd depths match ground truth", len(ratios) > 50 and abs(np.median(ratios) - 1) < 0.05,
                   (len(ratios), np.median(ratios) if len(ratios) else None))
 
+        # Focal self-calibration from a guess 0.75 x the truth (the masked run): refined toward the
+        # truth, the guess and a reason reported; a right guess is kept.
+        for factor in (0.75, 1.0):
+            f = factor * float(k[0])
+            rc, out, err = run("slam", "--images", os.path.join(seq, "rgb"), "--masks", os.path.join(seq, "mask"),
+                               "--intrinsics", "%r,%r,%s,%s" % (f, f, k[2], k[3]), "--out",
+                               os.path.join(tmp, "focal.tum"), "--refine-focal")
+            check("refine-focal %.2f runs" % factor, rc == 0, err)
+            if rc != 0:
+                continue
+            sm = json.loads(out)
+            check("refine-focal %.2f fields" % factor, sm["focal_guess_fx"] == f and len(sm["focal_reason"]) > 0, out)
+            if factor == 1.0:
+                check("right focal kept", not sm["focal_refined"] and sm["focal_fx"] == f, out)
+            else:
+                check("wrong focal refined", sm["focal_refined"] and abs(sm["focal_fx"] / float(k[0]) - 1) < 0.1 and
+                      0 < sm["focal_std"] < 0.05, out)
+
         # Bad input.
         out_tum = os.path.join(tmp, "x.tum")
         rc, _, err = run("slam", "--images", os.path.join(tmp, "nope"), "--intrinsics", intr, "--out", out_tum)
@@ -109,6 +127,12 @@ def main():
         check("bad intrinsics", rc == 2 and "intrinsics" in err, err)
         rc, _, err = run("slam", "--images", os.path.join(seq, "rgb"), "--out", out_tum)
         check("missing intrinsics", rc == 2 and "intrinsics" in err, err)
+        rc, _, err = run("slam", "--images", os.path.join(seq, "rgb"), "--intrinsics", intr, "--out", out_tum,
+                         "--focal-prior", "0.1")
+        check("focal prior without refinement", rc == 2 and "--refine-focal" in err, err)
+        rc, _, err = run("slam", "--images", os.path.join(seq, "rgb"), "--intrinsics", intr, "--out", out_tum,
+                         "--refine-focal", "--focal-prior", "0")
+        check("focal prior not positive", rc == 2 and "--focal-prior" in err, err)
         one = os.path.join(tmp, "one")
         os.makedirs(one)
         shutil.copy(os.path.join(seq, "rgb", "000000.png"), one)

@@ -2,7 +2,8 @@
 // wrong guess (0.7×, 1.3×) is recovered from rotating + translating cameras; a right guess is
 // kept; pure translation (focal unobservable) is declined with the guess kept; and the estimate
 // agrees with an independent brute-force search over f of the BA cost (plain bundleAdjust from
-// the same start at each candidate, no continuation, no parabolas).
+// the same start at each candidate, no continuation, no parabolas); the prior's centre stays at
+// priorFx when the camera holds an earlier estimate; minStdLog floors the reported std.
 #include <catch2/catch.hpp>
 
 #include "estimation_test_utils.hpp"
@@ -146,4 +147,41 @@ TEST_CASE("refineFocal declines a problem too small", "[slam][focal]") {
   CHECK(!r.accepted);
   CHECK(r.evaluations == 0);
   CHECK(r.reason.find("too small") != std::string::npos);
+}
+
+TEST_CASE("refineFocal: the prior stays at priorFx when the camera holds an earlier estimate", "[slam][focal]") {
+  // A camera at 1.2 × the truth with a tight prior (0.5 %): centred at the camera (priorFx unset)
+  // the prior holds the estimate well above the truth; centred at the truth (priorFx = f) the
+  // estimate is the truth's. This is a second refinement's situation: P.camera is the last
+  // estimate, the prior must stay on the user's guess.
+  Rng rngA(13), rngB(13);
+  BAProblem<double> A = focal_test::makeScene(rngA, true, 1.2, 1.0);
+  BAProblem<double> B = focal_test::makeScene(rngB, true, 1.2, 1.0);
+  FocalRefineOptions<double> o = focal_test::focalOptions();
+  o.priorSigmaLog = 0.005;
+  const FocalRefineResult<double> ra = refineFocal(A, o);
+  o.priorFx = kTrueF;
+  const FocalRefineResult<double> rb = refineFocal(B, o);
+  INFO("prior at the camera: " << ra.fx << " (" << ra.reason << "); at the truth: " << rb.fx << " (" << rb.reason << ")");
+  CHECK(rb.guessFx == Approx(1.2 * kTrueF));  // the guess reported is still the camera's
+  CHECK(std::abs(rb.fx / kTrueF - 1) < 0.01);
+  CHECK(ra.fx > 1.03 * kTrueF);
+  CHECK(std::abs(ra.fx - kTrueF) > 3 * std::abs(rb.fx - kTrueF));
+}
+
+TEST_CASE("refineFocal: minStdLog floors the reported std and keeps a guess within it", "[slam][focal]") {
+  for (double factor : {1.0, 1.03, 1.3}) {
+    Rng rng(11);
+    BAProblem<double> P = focal_test::makeScene(rng, true, factor);
+    FocalRefineOptions<double> o = focal_test::focalOptions();
+    o.minStdLog = 0.05;
+    const FocalRefineResult<double> r = refineFocal(P, o);
+    INFO("guess " << factor << ": " << r.fx << " std " << r.stdLog << " data std " << r.dataStdLog << " " << r.reason);
+    CHECK(r.accepted);
+    CHECK(r.stdLog == 0.05);
+    CHECK(r.dataStdLog < 0.02);  // the data alone is far tighter; only the reported std is floored
+    // a change under 2 stds (10 %) is not applied; 30 % is
+    CHECK(r.changed == (factor == 1.3));
+    if (factor == 1.3) CHECK(std::abs(r.fx / kTrueF - 1) < 0.02);
+  }
 }

@@ -426,6 +426,10 @@ if (!haveNative || !fs.existsSync(path.join(nativeDir, 'models', 'hand_right.npz
     slam.process(new Uint8Array(rgba.buffer, rgba.byteOffset, rgba.length), mask);
   }
   throwsWith('SLAM: frame of the wrong size', () => slam.process(new Uint8Array(100), null), 'not width*height');
+  throwsWith('SLAM: focal prior sigma not positive', () => new core.MonoSlam(Ks, Ws, Hs, { refineFocal: true, focalPriorSigma: 0 }),
+    'focalPriorSigma must be > 0');
+  throwsWith('SLAM: focal prior centre not positive', () => new core.MonoSlam(Ks, Ws, Hs, { refineFocal: true, focalPriorFx: -1 }),
+    'focalPriorFx must be finite and > 0');
   throwsWith('SLAM: mask of the wrong size', () => slam.process(new Uint8Array(Ws * Hs), new Uint8Array(7)),
     'mask (width*height): length 7');
   const res = slam.finish();

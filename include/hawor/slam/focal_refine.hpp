@@ -38,11 +38,20 @@ namespace hawor {
 template <typename Scalar>
 struct FocalRefineOptions {
   Scalar priorSigmaLog = Scalar(0.3);  ///< prior std of log(f/f_guess) (a FOV guess: ±30 %)
+  /// The prior's centre f_guess in pixels; 0: P.camera.fx. Set it when P.camera already holds an
+  /// earlier estimate (a second refinement), so the prior stays on the user's guess instead of
+  /// following each estimate (which would let a weak profile walk the focal away step by step).
+  Scalar priorFx = Scalar(0);
   Scalar searchMin = Scalar(0.5), searchMax = Scalar(2);  ///< search range, × f_guess
   int gridPerOctave = 4;               ///< coarse grid density (log spacing)
   Scalar maxStdLog = Scalar(0.05);     ///< decline when the data-only std of log f exceeds this
   Scalar minChange = Scalar(0.01);     ///< apply only a relative change above this...
   Scalar minChangeStds = Scalar(2);    ///< ...and above this many posterior stds
+  /// Floor of the reported std of log f. The profile's curvature treats every residual as
+  /// independent; a KLT track's errors in nearby frames are not, so with many frames the
+  /// curvature std comes out far below the real scatter (on table_work, estimates from re-selected
+  /// points of the same clip spread by 2-3 % while each claimed 0.05-0.5 %).
+  Scalar minStdLog = Scalar(0);
   int minPoses = 3;                    ///< free + fixed poses with observations
   int minObservations = 60;
   int rounds = 3;                      ///< profile searches, each re-centred at the last estimate
@@ -201,7 +210,7 @@ FocalRefineResult<Scalar> refineFocalOnce(BAProblem<Scalar>& P, const FocalRefin
   }
   res.dataStdLog = Scalar(1) / std::sqrt(dataCurv);
   const Scalar postCurv = dataCurv + Scalar(2) * priorW;
-  res.stdLog = Scalar(1) / std::sqrt(postCurv);
+  res.stdLog = std::max(Scalar(1) / std::sqrt(postCurv), opt.minStdLog);
   const Scalar uHat = (dataCurv * vertex + Scalar(2) * priorW * priorCentre) / postCurv;  // the prior's pull
   res.estimateFx = cam0.fx * std::exp(uHat);
   if (res.dataStdLog > opt.maxStdLog) {
@@ -244,11 +253,12 @@ FocalRefineResult<Scalar> refineFocalOnce(BAProblem<Scalar>& P, const FocalRefin
 template <typename Scalar>
 FocalRefineResult<Scalar> refineFocal(BAProblem<Scalar>& P, const FocalRefineOptions<Scalar>& opt = {}) {
   const Scalar guessFx = P.camera.fx;
+  const Scalar priorFx = opt.priorFx > Scalar(0) ? opt.priorFx : guessFx;
   FocalRefineResult<Scalar> total;
   std::vector<std::pair<Scalar, Scalar>> profile;
   int evaluations = 0;
   for (int round = 0; round < std::max(1, opt.rounds); ++round) {
-    const Scalar centre = std::log(guessFx / P.camera.fx);  // the prior's centre relative to P.camera
+    const Scalar centre = std::log(priorFx / P.camera.fx);  // the prior's centre relative to P.camera
     FocalRefineResult<Scalar> r = focal_detail::refineFocalOnce(P, opt, centre);
     for (const auto& q : r.profile) profile.emplace_back(q.first * r.guessFx / guessFx, q.second);
     evaluations += r.evaluations;

@@ -238,9 +238,19 @@ struct SlamOptions {
   /// finish(): self-calibrate the shared focal (fx, fy by one factor, principal point fixed) in
   /// the global bundle adjustment (focal_refine.hpp: profile of the BA cost over log f, a prior
   /// toward the given focal, declined when the motion does not determine it); the per-frame
-  /// refinement then uses the refined focal. Off by default (the tracking used the given focal).
+  /// refinement then uses the refined focal. With sequenceRefine, on the sequence refinement's
+  /// problem instead (refineFocalOnSequence), which is refined again with a changed focal. Off by
+  /// default (the tracking used the given focal).
   bool refineFocal = false;
   FocalRefineOptions<Scalar> focal;
+  int focalMaxFrames = 60;          ///< frames of the sequence refinement's problem in the focal profile
+  /// ...taken at least this many posed frames apart: a track's errors in consecutive frames are
+  /// correlated (KLT drift), which the profile's std (independent residuals) does not know; on
+  /// every frame the std comes out ~5x too small and a right guess is moved by 2-3 %.
+  int focalFrameSpacing = 5;
+  /// ...and the std of its estimate is taken as this at least (FocalRefineOptions::minStdLog): a
+  /// guess within ~2 × this of the estimate is kept.
+  Scalar focalMinStd = Scalar(0.02);
   /// Optional diagnostics sink (one line per event: initialisation attempts, losses, resets).
   std::function<void(const std::string&)> log;
 
@@ -306,6 +316,8 @@ class MonoSlam {
       throw Error("MonoSlam: invalid options");
     }
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
+    // every focal refinement's prior stays on the focal given here (or focal.priorFx)
+    if (!(opt_.focal.priorFx > Scalar(0))) opt_.focal.priorFx = cam_.fx;
   }
 
   /// Processes the next frame (8-bit grey or RGB(A)); `mask` may be null (no hands) or an 8-bit
@@ -366,12 +378,34 @@ class MonoSlam {
     if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
       std::vector<int> all(keyframes_.size());
       for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
-      adjust(all, opt_.globalIterations, true, opt_.refineFocal);
+      // With the sequence refinement on, the focal is refined on its problem instead (every
+      // frame's tracks, far more of the motion that determines the focal than the keyframes').
+      adjust(all, opt_.globalIterations, true, opt_.refineFocal && !opt_.sequenceRefine);
       for (std::size_t k = 0; k < keyframes_.size(); ++k) frames_[static_cast<std::size_t>(keyframes_[k].frame)].T = keyframes_[k].T;
     }
     if (opt_.refineFrames && !points_.empty()) refineAllFrames();
     fillUnposed();
-    const bool sequenceDone = opt_.sequenceRefine && everInitialised_ && refineWholeSequence();
+    bool sequenceDone = opt_.sequenceRefine && everInitialised_ && refineWholeSequence();
+    // The refinement's points and inliers were chosen at the old focal: repeat while it moves
+    // (at most 3 times); the result reports the first guess and the last estimate.
+    if (sequenceDone && opt_.refineFocal) {
+      const Scalar guess = cam_.fx;
+      bool changed = false;
+      for (int round = 0; sequenceDone && round < 3 && refineFocalOnSequence(); ++round) {
+        changed = true;
+        sequenceDone = refineWholeSequence();
+      }
+      if (changed) {
+        // the last round's own reason (it may have kept its guess, the previous round's estimate)
+        focal_.reason = "refined by the bundle adjustment of the sequence" +
+                        (focal_.changed ? std::string() : " (last round: " + focal_.reason + ")");
+        focal_.guessFx = guess;
+        focal_.changed = true;
+        focal_.accepted = true;
+        focal_.fx = cam_.fx;
+        focal_.fy = cam_.fy;
+      }
+    }
     if (opt_.headModelFill && everInitialised_) {
       std::vector<SE3T> T(static_cast<std::size_t>(n));
       std::vector<char> posed(static_cast<std::size_t>(n)), rot(static_cast<std::size_t>(n));
@@ -1678,6 +1712,7 @@ class MonoSlam {
                std::to_string(r.illConditioned) + " frames ill-conditioned");
     }
     if (r.points.empty()) return false;
+    refinedFrames_ = 0;  // the last refinement's count (it runs again after a focal change)
     for (char a : r.adjusted) refinedFrames_ += a;
     for (int f = 0; f < n; ++f) {
       Frame& fr = frames_[static_cast<std::size_t>(f)];
@@ -1717,6 +1752,104 @@ class MonoSlam {
     for (MapPoint& p : points_) {
       if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
     }
+  }
+
+  /// SlamOptions::refineFocal with the sequence refinement: the focal profile (focal_refine.hpp)
+  /// on a bundle-adjustment problem of the refined points and at most focalMaxFrames of the
+  /// adjusted frames (evenly spaced, focalFrameSpacing apart at least; each profile step is one
+  /// adjustment). True when the focal
+  /// changed (the caller refines the sequence again with it).
+  bool refineFocalOnSequence() {
+    std::vector<int> posedFrames;
+    for (int f = 0; f < static_cast<int>(frames_.size()); ++f) {
+      if (frames_[static_cast<std::size_t>(f)].posed) posedFrames.push_back(f);
+    }
+    focalAttempted_ = true;
+    if (posedFrames.size() < 3) {
+      focal_ = FocalRefineResult<Scalar>();
+      focal_.guessFx = focal_.fx = cam_.fx;
+      focal_.fy = cam_.fy;
+      focal_.reason = "too few posed frames for the focal";
+      return false;
+    }
+    const std::size_t step = std::max<std::size_t>(static_cast<std::size_t>(std::max(1, opt_.focalFrameSpacing)),
+                                                   (posedFrames.size() + opt_.focalMaxFrames - 1) / static_cast<std::size_t>(std::max(1, opt_.focalMaxFrames)));
+    BAProblem<Scalar> P;
+    P.camera = cam_;
+    std::vector<int> poseOf(frames_.size(), -1);
+    for (std::size_t i = 0; i < posedFrames.size(); i += std::max<std::size_t>(1, step)) {
+      poseOf[static_cast<std::size_t>(posedFrames[i])] = static_cast<int>(P.poses.size());
+      P.poses.push_back(frames_[static_cast<std::size_t>(posedFrames[i])].T);
+    }
+    for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
+      int seen = 0;
+      for (const auto& o : seqPointObs_[j]) seen += poseOf[static_cast<std::size_t>(o.first)] >= 0 ? 1 : 0;
+      if (seen < 2) continue;
+      const int pj = static_cast<int>(P.points.size());
+      P.points.push_back(seqPoints_[j]);
+      for (const auto& o : seqPointObs_[j]) {
+        const int v = poseOf[static_cast<std::size_t>(o.first)];
+        if (v < 0) continue;
+        BAObservation<Scalar> b;
+        b.pose = v;
+        b.point = pj;
+        b.uv = o.second;
+        P.observations.push_back(b);
+      }
+    }
+    P.poseFixed.assign(P.poses.size(), 0);
+    P.poseFixed[0] = 1;
+    int far = 0;
+    for (std::size_t v = 1; v < P.poses.size(); ++v) {
+      if ((P.poses[v].translation() - P.poses[0].translation()).norm() >
+          (P.poses[static_cast<std::size_t>(far)].translation() - P.poses[0].translation()).norm()) {
+        far = static_cast<int>(v);
+      }
+    }
+    const Scalar d = (P.poses[static_cast<std::size_t>(far)].translation() - P.poses[0].translation()).norm();
+    if (far > 0 && d > Scalar(0)) {
+      BAScalePrior<Scalar> sp;
+      sp.poseA = 0;
+      sp.poseB = far;
+      sp.distance = d;
+      sp.weight = Scalar(1e4) / (d * d);
+      P.scalePriors.push_back(sp);
+    }
+    FocalRefineOptions<Scalar> fo = opt_.focal;
+    fo.minStdLog = std::max(fo.minStdLog, opt_.focalMinStd);
+    fo.ba.maxIterations = opt_.globalIterations;
+    fo.ba.loss = RobustLoss::Huber;
+    fo.ba.sigmaPx = Scalar(1);
+    fo.ba.robustScale = Scalar(2);
+    fo.ba.functionTolerance = Scalar(1e-5);
+    focal_ = refineFocal(P, fo);
+    if (opt_.log) {
+      opt_.log("focal (sequence, " + std::to_string(P.poses.size()) + " frames, " + std::to_string(P.points.size()) + " points): " +
+               std::string(focal_.changed ? "refined " : "kept ") + std::to_string(double(P.camera.fx)) + " px (guess " +
+               std::to_string(double(focal_.guessFx)) + ", std " + std::to_string(double(100 * focal_.stdLog)) + " %, " +
+               std::to_string(focal_.evaluations) + " BAs): " + focal_.reason);
+    }
+    if (!focal_.changed) return false;
+    cam_ = P.camera;
+    opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
+    // The problem holds the adjustment at the new focal: its frames take those poses, the other
+    // posed frames move with the nearest of them (T' = T'_a·T_a⁻¹·T), so that the next refinement
+    // starts from poses that fit the new focal.
+    std::vector<SE3T> before(frames_.size());
+    for (std::size_t f = 0; f < frames_.size(); ++f) before[f] = frames_[f].T;
+    for (std::size_t f = 0; f < frames_.size(); ++f) {
+      if (poseOf[f] >= 0) frames_[f].T = P.poses[static_cast<std::size_t>(poseOf[f])];
+    }
+    for (std::size_t f = 0, last = frames_.size(); f < frames_.size(); ++f) {
+      if (poseOf[f] >= 0) {
+        last = f;
+        continue;
+      }
+      std::size_t ref = last;
+      for (std::size_t g = f + 1; ref == frames_.size() && g < frames_.size(); ++g) ref = poseOf[g] >= 0 ? g : ref;
+      if (ref < frames_.size()) frames_[f].T = frames_[ref].T * before[ref].inverse() * before[f];
+    }
+    return true;
   }
 
   /// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position

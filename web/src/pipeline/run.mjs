@@ -449,7 +449,7 @@ export async function runPipeline(source, options, hooks = {}) {
     t1 = now();
     while (last && last.changed && keptSlam && keptSlam.frames.length === T && focalPasses < maxPasses) {
       checkAbort(signal);
-      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma });
+      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma, focalPriorFx: Ks[0] });
       owned.push(slam2);
       for (let t = 0; t < T; ++t) slam2.process(keptSlam.frames[t], keptSlam.masks[t]);
       const traj2 = slam2.finish();
