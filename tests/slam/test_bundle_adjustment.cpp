@@ -563,3 +563,27 @@ TEST_CASE("bundleAdjust rejects malformed problems with hawor::Error", "[slam][b
   empty.camera = s.cam;
   CHECK(bundleAdjust(empty).termination == BATermination::NoVariables);
 }
+
+TEST_CASE("addFarthestScalePrior: the distance to the farthest centre, by brute force", "[slam][ba]") {
+  Rng rng(21);
+  BAProblem<double> P;
+  for (int i = 0; i < 7; ++i) P.poses.emplace_back(Mat3<double>::Identity(), Vec3<double>(rng.uniform3(-2, 2, -2, 2, -2, 2)));
+  const int anchor = 3;
+  int best = -1;
+  double bestD = 0;
+  for (int i = 0; i < 7; ++i) {
+    const double d = std::sqrt((P.poses[i].translation() - P.poses[anchor].translation()).squaredNorm());
+    if (d > bestD) bestD = d, best = i;
+  }
+  REQUIRE(addFarthestScalePrior(P, anchor, 100.0) == best);
+  REQUIRE(P.scalePriors.size() == 1);
+  CHECK(P.scalePriors[0].poseA == anchor);
+  CHECK(P.scalePriors[0].poseB == best);
+  CHECK(P.scalePriors[0].distance == Approx(bestD));
+  CHECK(P.scalePriors[0].weight == Approx(100.0 / (bestD * bestD)));
+  // every centre at the anchor's: nothing to hold
+  BAProblem<double> Q;
+  for (int i = 0; i < 3; ++i) Q.poses.emplace_back(Mat3<double>::Identity(), Vec3<double>(1, 2, 3));
+  CHECK(addFarthestScalePrior(Q, 0) == -1);
+  CHECK(Q.scalePriors.empty());
+}

@@ -86,6 +86,28 @@ struct BAProblem {
   std::vector<BAScalePrior<Scalar>> scalePriors;
 };
 
+/// The scale gauge of a monocular problem whose pose `anchor` is fixed: a prior holding the
+/// current distance d from the anchor's centre to the centre farthest from it, weight w / d²
+/// (so w is in units of the relative distance). Nothing is added when every centre coincides
+/// with the anchor's. Returns the farthest pose, or -1.
+template <typename Scalar>
+int addFarthestScalePrior(BAProblem<Scalar>& P, int anchor, Scalar w = Scalar(1e4)) {
+  int farV = -1;
+  Scalar farD = Scalar(0);
+  for (int v = 0; v < static_cast<int>(P.poses.size()); ++v) {
+    const Scalar d = (P.poses[static_cast<std::size_t>(v)].translation() - P.poses[static_cast<std::size_t>(anchor)].translation()).norm();
+    if (d > farD) farD = d, farV = v;
+  }
+  if (farV < 0) return -1;
+  BAScalePrior<Scalar> sp;
+  sp.poseA = anchor;
+  sp.poseB = farV;
+  sp.distance = farD;
+  sp.weight = w / (farD * farD);
+  P.scalePriors.push_back(sp);
+  return farV;
+}
+
 enum class BALinearSolver { Auto, Dense, Sparse };
 
 enum class BATermination {

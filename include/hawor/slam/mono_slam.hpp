@@ -1459,6 +1459,18 @@ class MonoSlam {
   }
 
   // ---------------------------------------------------------------- bundle adjustment
+  /// The map's bundle-adjustment settings (keyframe windows, the global BA, the focal profile):
+  /// Huber at 2σ with σ = 1 px.
+  static BAOptions<Scalar> mapBAOptions(int iterations) {
+    BAOptions<Scalar> bo;
+    bo.maxIterations = iterations;
+    bo.loss = RobustLoss::Huber;
+    bo.sigmaPx = Scalar(1);
+    bo.robustScale = Scalar(2);
+    bo.functionTolerance = Scalar(1e-5);
+    return bo;
+  }
+
   /// Bundle adjustment of the keyframes `window` (free) and their points; keyframes outside the
   /// window that see those points are fixed. Gauge: the first keyframe of each segment is fixed
   /// and its first baseline held by a scale prior when no other fixed keyframe anchors the scale.
@@ -1544,12 +1556,7 @@ class MonoSlam {
         P.observations.push_back(ob);
       }
     }
-    BAOptions<Scalar> bo;
-    bo.maxIterations = iterations;
-    bo.loss = RobustLoss::Huber;
-    bo.sigmaPx = Scalar(1);
-    bo.robustScale = Scalar(2);
-    bo.functionTolerance = Scalar(1e-5);
+    const BAOptions<Scalar> bo = mapBAOptions(iterations);
     if (withFocal) {
       FocalRefineOptions<Scalar> fo = opt_.focal;
       fo.ba = bo;
@@ -1782,46 +1789,14 @@ class MonoSlam {
       P.poses.push_back(frames_[static_cast<std::size_t>(posedFrames[i])].T);
     }
     for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
-      int seen = 0;
-      for (const auto& o : seqPointObs_[j]) seen += poseOf[static_cast<std::size_t>(o.first)] >= 0 ? 1 : 0;
-      if (seen < 2) continue;
-      const int pj = static_cast<int>(P.points.size());
-      P.points.push_back(seqPoints_[j]);
-      for (const auto& o : seqPointObs_[j]) {
-        const int v = poseOf[static_cast<std::size_t>(o.first)];
-        if (v < 0) continue;
-        BAObservation<Scalar> b;
-        b.pose = v;
-        b.point = pj;
-        b.uv = o.second;
-        P.observations.push_back(b);
-      }
+      if (addTrackObservations(P, static_cast<int>(P.points.size()), seqPointObs_[j], poseOf, 2)) P.points.push_back(seqPoints_[j]);
     }
     P.poseFixed.assign(P.poses.size(), 0);
     P.poseFixed[0] = 1;
-    int far = 0;
-    for (std::size_t v = 1; v < P.poses.size(); ++v) {
-      if ((P.poses[v].translation() - P.poses[0].translation()).norm() >
-          (P.poses[static_cast<std::size_t>(far)].translation() - P.poses[0].translation()).norm()) {
-        far = static_cast<int>(v);
-      }
-    }
-    const Scalar d = (P.poses[static_cast<std::size_t>(far)].translation() - P.poses[0].translation()).norm();
-    if (far > 0 && d > Scalar(0)) {
-      BAScalePrior<Scalar> sp;
-      sp.poseA = 0;
-      sp.poseB = far;
-      sp.distance = d;
-      sp.weight = Scalar(1e4) / (d * d);
-      P.scalePriors.push_back(sp);
-    }
+    addFarthestScalePrior(P, 0);
     FocalRefineOptions<Scalar> fo = opt_.focal;
     fo.minStdLog = std::max(fo.minStdLog, opt_.focalMinStd);
-    fo.ba.maxIterations = opt_.globalIterations;
-    fo.ba.loss = RobustLoss::Huber;
-    fo.ba.sigmaPx = Scalar(1);
-    fo.ba.robustScale = Scalar(2);
-    fo.ba.functionTolerance = Scalar(1e-5);
+    fo.ba = mapBAOptions(opt_.globalIterations);
     focal_ = refineFocal(P, fo);
     if (opt_.log) {
       opt_.log("focal (sequence, " + std::to_string(P.poses.size()) + " frames, " + std::to_string(P.points.size()) + " points): " +

@@ -50,6 +50,27 @@ struct TrackObservation {
   Vec2<Scalar> uv = Vec2<Scalar>::Zero();
 };
 
+/// Adds a point's observations (frame, pixel) to P as point `point`, each frame through
+/// poseOf (-1: not in the problem), when at least minFrames of its frames are in the problem.
+/// Returns whether it added them (the caller then appends the point itself).
+template <typename Scalar>
+bool addTrackObservations(BAProblem<Scalar>& P, int point, const std::vector<std::pair<int, Vec2<Scalar>>>& obs,
+                          const std::vector<int>& poseOf, int minFrames) {
+  int n = 0;
+  for (const auto& o : obs) n += poseOf[static_cast<std::size_t>(o.first)] >= 0 ? 1 : 0;
+  if (n < minFrames) return false;
+  for (const auto& o : obs) {
+    const int v = poseOf[static_cast<std::size_t>(o.first)];
+    if (v < 0) continue;
+    BAObservation<Scalar> b;
+    b.pose = v;
+    b.point = point;
+    b.uv = o.second;
+    P.observations.push_back(b);
+  }
+  return true;
+}
+
 template <typename Scalar>
 struct SequenceRefineOptions {
   Scalar minParallaxDeg = Scalar(1);  ///< largest ray angle of a track, at least
@@ -300,19 +321,7 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
     std::vector<int> ptTrack;
     std::vector<std::vector<std::pair<int, Vec2<Scalar>>>> ptObs;
     for (std::size_t j = 0; j < P.points.size(); ++j) {
-      int n = 0;
-      for (const auto& o : pointObs[j]) n += frameVar[static_cast<std::size_t>(o.first)] >= 0 ? 1 : 0;
-      if (n < opt.minObservations) continue;
-      const int pj = static_cast<int>(pts.size());
-      for (const auto& o : pointObs[j]) {
-        const int v = frameVar[static_cast<std::size_t>(o.first)];
-        if (v < 0) continue;
-        BAObservation<Scalar> b;
-        b.pose = v;
-        b.point = pj;
-        b.uv = o.second;
-        P.observations.push_back(b);
-      }
+      if (!addTrackObservations(P, static_cast<int>(pts.size()), pointObs[j], frameVar, opt.minObservations)) continue;
       pts.push_back(P.points[j]);
       ptTrack.push_back(pointTrack[j]);
       ptObs.push_back(std::move(pointObs[j]));
@@ -327,20 +336,7 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
     }
     P.poseFixed.assign(P.poses.size(), 0);
     P.poseFixed[static_cast<std::size_t>(fixedV)] = 1;
-    int farV = -1;
-    Scalar farD = Scalar(0);
-    for (int v = 0; v < static_cast<int>(P.poses.size()); ++v) {
-      const Scalar d = (P.poses[static_cast<std::size_t>(v)].translation() - P.poses[static_cast<std::size_t>(fixedV)].translation()).norm();
-      if (d > farD) farD = d, farV = v;
-    }
-    if (farV >= 0) {
-      BAScalePrior<Scalar> sp;
-      sp.poseA = fixedV;
-      sp.poseB = farV;
-      sp.distance = farD;
-      sp.weight = Scalar(1e4) / (farD * farD);
-      P.scalePriors.push_back(sp);
-    }
+    addFarthestScalePrior(P, fixedV);
     BAOptions<Scalar> bo;
     bo.maxIterations = opt.iterations;
     bo.loss = RobustLoss::Huber;
