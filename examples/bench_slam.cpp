@@ -6,7 +6,7 @@
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
-//              [--no-head-model] [--no-revisit]
+//              [--no-head-model] [--no-revisit] [--no-third-view]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image)
@@ -17,6 +17,7 @@
 //   --no-sequence    SlamOptions::sequenceRefine off (no full-sequence bundle adjustment)
 //   --no-head-model  SlamOptions::headModelFill off (unposed frames held / interpolated)
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
+//   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -67,7 +68,7 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true;
+  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true, thirdView = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -109,8 +110,10 @@ int main(int argc, char** argv) {
       headModel = false;
     } else if (a == "--no-revisit") {
       revisit = false;
+    } else if (a == "--no-third-view") {
+      thirdView = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view]\n");
       return 2;
     }
   }
@@ -151,6 +154,7 @@ int main(int argc, char** argv) {
       om.sequenceRefine = ou.sequenceRefine = sequence;
       om.headModelFill = ou.headModelFill = headModel;
       om.revisitSearch = ou.revisitSearch = revisit;
+      om.twoViewThirdView = ou.twoViewThirdView = thirdView;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;

@@ -51,7 +51,7 @@ template struct hawor::TwoViewResult<double>;
       const hawor::PoseRefineOptions<S>&);                                                      \
   template hawor::TwoViewResult<S> hawor::initializeTwoView(                                    \
       const std::vector<hawor::Vec2<S>>&, const std::vector<hawor::Vec2<S>>&,                   \
-      const hawor::TwoViewOptions<S>&);                                                         \
+      const hawor::TwoViewOptions<S>&, const std::vector<std::vector<hawor::Vec2<S>>>*);        \
   template void hawor::essentialFivePoint(const hawor::Vec2<S>*, const hawor::Vec2<S>*,         \
                                           std::vector<hawor::Mat3<S>>&);                        \
   template void hawor::solveP3P(const hawor::Vec3<S>*, const hawor::Vec3<S>*,                   \

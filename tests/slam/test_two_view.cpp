@@ -123,6 +123,85 @@ TEMPLATE_TEST_CASE("initializeTwoView: a pure rotation selects H, reports no par
   }
 }
 
+namespace {
+
+// A table top 0.6 m away seen from a head that moves towards it along a curve (the wearer's
+// sway): the homography of the first and last views has two decompositions with every point in
+// front (the plane normal and the translation swap roles), so the pair alone is ambiguous; the
+// views between, off the pair's line of motion, fit only the true plane.
+struct PlaneSway {
+  std::vector<std::vector<Vec2<double>>> x;  // per view, the same points (normalised)
+  Eigen::Vector3d c2;                         // the last camera centre in the first camera's frame
+  Eigen::Matrix3d R2;                         // the last camera's orientation (camera-to-first)
+};
+PlaneSway makePlaneSway(unsigned seed) {
+  Rng rng(seed);
+  PlaneSway p;
+  const Eigen::Vector2d pxy = rng.uniform2(-0.4, 0.4, -0.4, 0.4);
+  const Eigen::Vector3d pn = Eigen::Vector3d(pxy(0), pxy(1), -1.0).normalized();
+  const double side = rng.uniform(0, 2 * est_test::pi());
+  const Eigen::Vector3d axis = rng.unitVector();
+  const int V = 11;
+  std::vector<Eigen::Matrix3d> R(V);
+  std::vector<Eigen::Vector3d> C(V);
+  for (int k = 0; k < V; ++k) {
+    const double s = double(k) / (V - 1);
+    // 3 cm towards the table, 2 cm sideways growing as s²: a curved path.
+    C[k] = Eigen::Vector3d(0.02 * s * s * std::cos(side), 0.02 * s * s * std::sin(side), 0.03 * s);
+    R[k] = Eigen::AngleAxisd(0.05 * s, axis).toRotationMatrix();
+  }
+  p.c2 = C[V - 1];
+  p.R2 = R[V - 1];
+  p.x.resize(V);
+  for (int n = 0; n < 80;) {
+    const Eigen::Vector3d ray(rng.uniform(-0.6, 0.6), rng.uniform(-0.45, 0.45), 1.0);
+    const double z = -0.6 / pn.dot(ray);
+    if (!(z > 0.2)) continue;
+    const Eigen::Vector3d X = z * ray;
+    std::vector<Vec2<double>> obs(V);
+    bool ok = true;
+    for (int k = 0; k < V; ++k) {
+      const Eigen::Vector3d Xc = R[k].transpose() * (X - C[k]);
+      ok = ok && Xc.z() > 0.1;
+      const Eigen::Vector2d e = rng.normal2();
+      obs[k] = Vec2<double>(Xc.x() / Xc.z() + 0.3 / 500.0 * e(0), Xc.y() / Xc.z() + 0.3 / 500.0 * e(1));
+    }
+    if (!ok) continue;
+    for (int k = 0; k < V; ++k) p.x[k].push_back(obs[k]);
+    ++n;
+  }
+  return p;
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("initializeTwoView: further views settle a planar scene's two-fold ambiguity",
+                   "[slam][two_view]", float, double) {
+  using S = TestType;
+  int resolved = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    const PlaneSway p = makePlaneSway(seed);
+    const auto x1 = est_test::castPoints<S>(p.x.front()), x2 = est_test::castPoints<S>(p.x.back());
+    std::vector<std::vector<Vec2<S>>> more;
+    for (std::size_t k = 1; k + 1 < p.x.size(); ++k) more.push_back(est_test::castPoints<S>(p.x[k]));
+    const auto r0 = initializeTwoView(x1, x2, TwoViewOptions<S>{});
+    const auto r1 = initializeTwoView(x1, x2, TwoViewOptions<S>{}, &more);
+    INFO("seed " << seed << ": pair alone status " << int(r0.status) << ", with the views between status "
+                 << int(r1.status) << ", costs " << r1.thirdViewCost << " / " << r1.thirdViewRunnerUp);
+    CHECK(r0.status == TwoViewStatus::Ambiguous);
+    CHECK(r0.model == TwoViewModel::Homography);
+    CHECK(r1.thirdViewCandidates == 2);
+    // Settled or not, never the wrong twin: an Ok result has the true motion.
+    CHECK((r1.status == TwoViewStatus::Ok || r1.status == TwoViewStatus::Ambiguous));
+    if (r1.ok()) {
+      ++resolved;
+      CHECK(est_test::angleDeg(r1.T_c1_c2.translation().template cast<double>(), p.c2) < 5.0);
+      CHECK(est_test::rotationErrorDeg(r1.T_c1_c2.rotationMatrix().template cast<double>(), p.R2) < 0.5);
+    }
+  }
+  CHECK(resolved >= 4);
+}
+
 TEST_CASE("initializeTwoView: a tiny baseline is not enough parallax", "[slam][two_view]") {
   Rng rng(401);
   auto sc = est_test::makeTwoViewScene(rng, 0, 200, 0.0, 0.5);
@@ -172,6 +251,10 @@ TEST_CASE("initializeTwoView: degenerate input gives a status or hawor::Error", 
   b.pop_back();
   CHECK_THROWS_AS(initializeTwoView(a, b, opt), hawor::Error);
   b.push_back(Vec2<double>(0, 0));
+  {
+    std::vector<std::vector<Vec2<double>>> more(1, std::vector<Vec2<double>>(a.size() - 1, Vec2<double>(0, 0)));
+    CHECK_THROWS_AS(initializeTwoView(a, b, opt, &more), hawor::Error);  // a further view of another size
+  }
   TwoViewOptions<double> bad;
   bad.focalPx = 0;
   CHECK_THROWS_AS(initializeTwoView(a, b, bad), hawor::Error);

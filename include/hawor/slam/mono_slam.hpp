@@ -196,6 +196,9 @@ struct SlamOptions {
   // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
   // puts the frame back in the old map, and the old segment goes on (no new scale).
   bool relocalise = true;
+  /// Two-view initialisation: the frame halfway between the reference and the current one as a
+  /// third view that settles a two-fold ambiguity (a planar scene's homography; two_view.hpp).
+  bool twoViewThirdView = true;
   /// At each keyframe, search the kept keyframes (relocalise's) that saw the current view a while
   /// ago (searchRevisits); needs relocalise.
   bool revisitSearch = true;
@@ -790,15 +793,38 @@ class MonoSlam {
         x1.push_back(normalised(rf.obsUv[static_cast<std::size_t>(bestOther[j])]));
         x2.push_back(normalised(tracks_[static_cast<std::size_t>(bestIdx[j])].uv));
       }
+      // Further views (the frames between, every second) settle a two-fold ambiguity
+      // (two_view.hpp): the head's sway curves, and a view off the pair's line of motion fits
+      // only the true plane.
+      std::vector<std::vector<V2>> x3;
+      if (opt_.twoViewThirdView) {
+        const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+        for (int mid = bestG + 2; mid < f; mid += 2) {
+          const Frame& mf = frames_[static_cast<std::size_t>(mid)];
+          std::vector<V2> v;
+          std::size_t a = 0;
+          for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+            const int id = tracks_[static_cast<std::size_t>(bestIdx[j])].id;
+            while (a < mf.obsTrack.size() && mf.obsTrack[a] < id) ++a;
+            v.push_back(a < mf.obsTrack.size() && mf.obsTrack[a] == id ? normalised(mf.obsUv[a]) : V2(nan, nan));
+          }
+          x3.push_back(std::move(v));
+        }
+      }
       TwoViewOptions<Scalar> tvo = opt_.twoView;
       tvo.seed = opt_.twoView.seed + static_cast<std::uint32_t>(f);
-      const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo);
+      const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo, x3.empty() ? nullptr : &x3);
       if (opt_.log) {
         opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(bestG) + ", " +
                  std::to_string(x1.size()) + " tracks, flow " + std::to_string(bestFlow) + " px: status " +
                  std::to_string(int(tv.status)) + " model " + std::to_string(int(tv.model)) + " inliers " +
                  std::to_string(tv.numInliers) + " triangulated " + std::to_string(tv.numTriangulated) +
-                 " parallax " + std::to_string(double(tv.medianParallaxDeg)));
+                 " parallax " + std::to_string(double(tv.medianParallaxDeg)) +
+                 (tv.thirdViewCandidates > 0 ? ", further views: " +
+                                                   std::to_string(tv.thirdViewCandidates) + " candidates, costs " +
+                                                   std::to_string(double(tv.thirdViewCost)) + " / " +
+                                                   std::to_string(double(tv.thirdViewRunnerUp)) + " px2"
+                                             : std::string()));
       }
       if (tv.ok()) {
         if (bestG != refFrame_ && refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();

@@ -19,7 +19,14 @@
 //     by triangulating the inliers (DLT, triangulation.hpp): a point is good when it is in front
 //     of both cameras, reprojects within maxReprojPx in both views and has a parallax of at least
 //     minPointParallaxDeg. The best motion needs minTriangulated good points and must beat the
-//     second best clearly (second ≤ ambiguityRatio × best), else Ambiguous.
+//     second best clearly (second ≤ ambiguityRatio × best), else Ambiguous — unless a third view
+//     of the correspondences is given (x3, optional): then every candidate within the ratio is
+//     scored by resecting the third view against its points (PnP-RANSAC) and taking the MSAC
+//     cost Σ min(e², T²) of the reprojection errors there (T = thresholdPx). A planar scene (a
+//     table top seen from above) gives a homography with two valid decompositions (the plane
+//     normal and the translation swap roles, Faugeras & Lustman 1988) that no two-view test can
+//     tell apart; a third camera position generally fits only the true plane. The candidate
+//     whose cost is at most ambiguityRatio × the next one's wins; otherwise Ambiguous.
 //  4. Parallax: the median parallax of the best motion's points (all in front, any parallax) must
 //     reach minParallaxDeg, else NotEnoughParallax. When no motion triangulates enough points,
 //     the rotation-compensated ray angle ∠(x1, R21ᵀ·x2) (the triangulation angle for exact data)
@@ -51,6 +58,7 @@
 #include "hawor/slam/bundle_adjustment.hpp"
 #include "hawor/slam/essential.hpp"
 #include "hawor/slam/homography.hpp"
+#include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/ransac.hpp"
 #include "hawor/slam/triangulation.hpp"
 
@@ -82,6 +90,7 @@ struct TwoViewOptions {
   Scalar maxReprojPx = Scalar(2);          ///< per-view reprojection error of a triangulated point
   int minTriangulated = 30;
   Scalar ambiguityRatio = Scalar(0.75);
+  int minThirdView = 20;                ///< third-view observations of a candidate's points to score it
   bool refine = true;
   int refineIterations = 15;
 };
@@ -103,6 +112,9 @@ struct TwoViewResult {
   Scalar gricHomography = Scalar(0);  ///< GRIC of H (lower is better; 0 if H was not found)
   Mat3<Scalar> E = Mat3<Scalar>::Zero();    ///< essential matrix (x2ᵀ E x1 = 0), if estimated
   Mat3<Scalar> H = Mat3<Scalar>::Zero();    ///< homography (x2 ∝ H x1), if estimated
+  /// Third view: candidates scored (0: none) and the winner's / runner-up's MSAC costs (px²).
+  int thirdViewCandidates = 0;
+  Scalar thirdViewCost = Scalar(0), thirdViewRunnerUp = Scalar(0);
   bool ok() const { return status == TwoViewStatus::Ok; }
 };
 
@@ -166,18 +178,26 @@ struct MotionScore {
 
 }  // namespace two_view_detail
 
-/// Two-view initialisation (file comment) from normalised correspondences x1[i] ↔ x2[i].
-/// Throws hawor::Error for mismatched sizes, non-finite coordinates or invalid options; every
-/// other failure is a status.
+/// Two-view initialisation (file comment) from normalised correspondences x1[i] ↔ x2[i]; x3
+/// (optional): the same correspondences in a third view (normalised, non-finite where not
+/// seen), used only to resolve an ambiguity. Throws hawor::Error for mismatched sizes,
+/// non-finite coordinates in x1/x2 or invalid options; every other failure is a status.
 template <typename Scalar>
 TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
                                         const std::vector<Vec2<Scalar>>& x2,
-                                        const TwoViewOptions<Scalar>& opt = {}) {
+                                        const TwoViewOptions<Scalar>& opt = {},
+                                        const std::vector<std::vector<Vec2<Scalar>>>* x3 = nullptr) {
   using M3 = Eigen::Matrix<Scalar, 3, 3>;
   using namespace two_view_detail;
   if (x1.size() != x2.size()) {
     throw Error("initializeTwoView: " + std::to_string(x1.size()) + " points in view 1 but " +
                 std::to_string(x2.size()) + " in view 2");
+  }
+  for (std::size_t v = 0; x3 && v < x3->size(); ++v) {
+    if ((*x3)[v].size() != x1.size()) {
+      throw Error("initializeTwoView: " + std::to_string(x1.size()) + " points in view 1 but " +
+                  std::to_string((*x3)[v].size()) + " in further view " + std::to_string(v));
+    }
   }
   for (std::size_t i = 0; i < x1.size(); ++i) {
     if (!x1[i].allFinite() || !x2[i].allFinite()) {
@@ -362,6 +382,62 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
   for (int k = 0; k < nc; ++k) {
     if (k != best) second = std::max(second, scores[static_cast<std::size_t>(k)].good);
   }
+  bool resolved = false;  // an ambiguity settled by the third view
+  if (x3 && !x3->empty() && best >= 0 && scores[static_cast<std::size_t>(best)].good >= opt.minTriangulated &&
+      Scalar(second) > opt.ambiguityRatio * Scalar(scores[static_cast<std::size_t>(best)].good)) {
+    // Third view: resect it against each close candidate's points; the MSAC cost decides.
+    PinholeCamera<Scalar> cam3;
+    cam3.fx = cam3.fy = f;
+    cam3.cx = cam3.cy = Scalar(0);
+    const Scalar T2 = opt.thresholdPx * opt.thresholdPx;
+    std::vector<std::pair<Scalar, int>> costs;
+    for (int k = 0; k < nc; ++k) {
+      const auto& sc = scores[static_cast<std::size_t>(k)];
+      if (!(Scalar(sc.good) > opt.ambiguityRatio * Scalar(scores[static_cast<std::size_t>(best)].good))) continue;
+      Scalar total = Scalar(0);
+      int views = 0;
+      for (const auto& view : *x3) {
+        std::vector<Vec3<Scalar>> X;
+        std::vector<Vec2<Scalar>> uv;
+        for (int i = 0; i < n; ++i) {
+          const auto& y = view[static_cast<std::size_t>(i)];
+          if (!sc.ok[static_cast<std::size_t>(i)] || !y.allFinite()) continue;
+          X.push_back(sc.X[static_cast<std::size_t>(i)]);
+          uv.push_back(f * y);
+        }
+        if (static_cast<int>(X.size()) < opt.minThirdView) continue;
+        PnPRansacOptions<Scalar> po;
+        po.thresholdPx = opt.thresholdPx;
+        po.seed = opt.seed ^ (0x3d1eu + static_cast<std::uint32_t>(views));
+        po.minInliers = 6;
+        const PnPRansacResult<Scalar> r = solvePnPRansac(X, uv, cam3, po);
+        Scalar cost = T2;
+        if ((r.status == PnPStatus::Ok || r.status == PnPStatus::NotEnoughInliers) && r.T_w_c.translation().allFinite()) {
+          const SE3<Scalar> Tcw = r.T_w_c.inverse();
+          cost = Scalar(0);
+          for (std::size_t i = 0; i < X.size(); ++i) {
+            const Vec3<Scalar> Xc = Tcw * X[i];
+            const Scalar e2 = Xc(2) > Scalar(0) ? (cam3.project(Xc) - uv[i]).squaredNorm() : T2;
+            cost += std::min(std::isfinite(e2) ? e2 : T2, T2);
+          }
+          cost /= Scalar(X.size());  // per observation: candidates see different subsets
+        }
+        total += cost;
+        ++views;
+      }
+      if (views > 0) costs.push_back({total / Scalar(views), k});
+    }
+    std::sort(costs.begin(), costs.end());
+    res.thirdViewCandidates = static_cast<int>(costs.size());
+    if (costs.size() >= 2 && std::isfinite(costs[0].first)) {
+      res.thirdViewCost = costs[0].first;
+      res.thirdViewRunnerUp = costs[1].first;
+      if (costs[0].first <= opt.ambiguityRatio * costs[1].first) {
+        best = costs[0].second;
+        resolved = true;
+      }
+    }
+  }
   if (best < 0 || scores[static_cast<std::size_t>(best)].good < opt.minTriangulated) {
     // No motion triangulates enough points. Too little parallax when some rotation (one the
     // model allows, for H the one nearest to H, or the Kabsch fit of the rays) aligns the rays
@@ -405,7 +481,7 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
   res.points = B.X;
   res.triangulated = B.ok;
   res.numTriangulated = B.good;
-  if (Scalar(second) > opt.ambiguityRatio * Scalar(B.good)) {
+  if (!resolved && Scalar(second) > opt.ambiguityRatio * Scalar(B.good)) {
     res.status = TwoViewStatus::Ambiguous;
     return res;
   }
