@@ -196,8 +196,8 @@ struct SlamOptions {
   // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
   // puts the frame back in the old map, and the old segment goes on (no new scale).
   bool relocalise = true;
-  /// Two-view initialisation: the frame halfway between the reference and the current one as a
-  /// third view that settles a two-fold ambiguity (a planar scene's homography; two_view.hpp).
+  /// Two-view initialisation: every second frame between the reference and the current one as
+  /// further views that settle a two-fold ambiguity (a planar scene's homography; two_view.hpp).
   bool twoViewThirdView = true;
   /// At each keyframe, search the kept keyframes (relocalise's) that saw the current view a while
   /// ago (searchRevisits); needs relocalise.

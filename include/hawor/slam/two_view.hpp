@@ -19,14 +19,15 @@
 //     by triangulating the inliers (DLT, triangulation.hpp): a point is good when it is in front
 //     of both cameras, reprojects within maxReprojPx in both views and has a parallax of at least
 //     minPointParallaxDeg. The best motion needs minTriangulated good points and must beat the
-//     second best clearly (second ≤ ambiguityRatio × best), else Ambiguous — unless a third view
-//     of the correspondences is given (x3, optional): then every candidate within the ratio is
-//     scored by resecting the third view against its points (PnP-RANSAC) and taking the MSAC
-//     cost Σ min(e², T²) of the reprojection errors there (T = thresholdPx). A planar scene (a
-//     table top seen from above) gives a homography with two valid decompositions (the plane
-//     normal and the translation swap roles, Faugeras & Lustman 1988) that no two-view test can
-//     tell apart; a third camera position generally fits only the true plane. The candidate
-//     whose cost is at most ambiguityRatio × the next one's wins; otherwise Ambiguous.
+//     second best clearly (second ≤ ambiguityRatio × best), else Ambiguous — unless further
+//     views of the correspondences are given (x3, optional): then every candidate within the
+//     ratio resects each further view against its points (PnP-RANSAC) and is scored by the MSAC
+//     cost per observation, Σ min(e², T²)/n, of the reprojection errors there (T = thresholdPx),
+//     averaged over the views. A planar scene (a table top seen from above) gives a homography
+//     with two valid decompositions (the plane normal and the translation swap roles, Faugeras &
+//     Lustman 1988) that no two-view test can tell apart; a camera position off the pair's line
+//     of motion generally fits only the true plane. The candidate whose cost is at most
+//     ambiguityRatio × the next one's wins; otherwise Ambiguous.
 //  4. Parallax: the median parallax of the best motion's points (all in front, any parallax) must
 //     reach minParallaxDeg, else NotEnoughParallax. When no motion triangulates enough points,
 //     the rotation-compensated ray angle ∠(x1, R21ᵀ·x2) (the triangulation angle for exact data)
@@ -90,7 +91,7 @@ struct TwoViewOptions {
   Scalar maxReprojPx = Scalar(2);          ///< per-view reprojection error of a triangulated point
   int minTriangulated = 30;
   Scalar ambiguityRatio = Scalar(0.75);
-  int minThirdView = 20;                ///< third-view observations of a candidate's points to score it
+  int minThirdView = 20;                ///< observations of a candidate's points a further view needs to score it
   bool refine = true;
   int refineIterations = 15;
 };
@@ -112,7 +113,8 @@ struct TwoViewResult {
   Scalar gricHomography = Scalar(0);  ///< GRIC of H (lower is better; 0 if H was not found)
   Mat3<Scalar> E = Mat3<Scalar>::Zero();    ///< essential matrix (x2ᵀ E x1 = 0), if estimated
   Mat3<Scalar> H = Mat3<Scalar>::Zero();    ///< homography (x2 ∝ H x1), if estimated
-  /// Third view: candidates scored (0: none) and the winner's / runner-up's MSAC costs (px²).
+  /// Further views: candidates scored (0: none) and the winner's / runner-up's MSAC costs per
+  /// observation (px², averaged over the views).
   int thirdViewCandidates = 0;
   Scalar thirdViewCost = Scalar(0), thirdViewRunnerUp = Scalar(0);
   bool ok() const { return status == TwoViewStatus::Ok; }
@@ -179,8 +181,8 @@ struct MotionScore {
 }  // namespace two_view_detail
 
 /// Two-view initialisation (file comment) from normalised correspondences x1[i] ↔ x2[i]; x3
-/// (optional): the same correspondences in a third view (normalised, non-finite where not
-/// seen), used only to resolve an ambiguity. Throws hawor::Error for mismatched sizes,
+/// (optional): the same correspondences in further views, one vector per view (normalised,
+/// non-finite where not seen), used only to resolve an ambiguity. Throws hawor::Error for mismatched sizes,
 /// non-finite coordinates in x1/x2 or invalid options; every other failure is a status.
 template <typename Scalar>
 TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
@@ -382,10 +384,10 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
   for (int k = 0; k < nc; ++k) {
     if (k != best) second = std::max(second, scores[static_cast<std::size_t>(k)].good);
   }
-  bool resolved = false;  // an ambiguity settled by the third view
+  bool resolved = false;  // an ambiguity settled by the further views
   if (x3 && !x3->empty() && best >= 0 && scores[static_cast<std::size_t>(best)].good >= opt.minTriangulated &&
       Scalar(second) > opt.ambiguityRatio * Scalar(scores[static_cast<std::size_t>(best)].good)) {
-    // Third view: resect it against each close candidate's points; the MSAC cost decides.
+    // Further views: each resected against each close candidate's points; the MSAC cost decides.
     PinholeCamera<Scalar> cam3;
     cam3.fx = cam3.fy = f;
     cam3.cx = cam3.cy = Scalar(0);
@@ -409,7 +411,6 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
         PnPRansacOptions<Scalar> po;
         po.thresholdPx = opt.thresholdPx;
         po.seed = opt.seed ^ (0x3d1eu + static_cast<std::uint32_t>(views));
-        po.minInliers = 6;
         const PnPRansacResult<Scalar> r = solvePnPRansac(X, uv, cam3, po);
         Scalar cost = T2;
         if ((r.status == PnPStatus::Ok || r.status == PnPStatus::NotEnoughInliers) && r.T_w_c.translation().allFinite()) {
