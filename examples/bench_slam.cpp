@@ -6,7 +6,7 @@
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
-//              [--no-head-model] [--no-revisit] [--no-third-view]
+//              [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image)
@@ -18,6 +18,7 @@
 //   --no-head-model  SlamOptions::headModelFill off (unposed frames held / interpolated)
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
+//   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -68,7 +69,8 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true, thirdView = true;
+  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true, thirdView = true,
+       turnBridge = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -112,8 +114,10 @@ int main(int argc, char** argv) {
       revisit = false;
     } else if (a == "--no-third-view") {
       thirdView = false;
+    } else if (a == "--no-turn-bridge") {
+      turnBridge = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge]\n");
       return 2;
     }
   }
@@ -155,6 +159,7 @@ int main(int argc, char** argv) {
       om.headModelFill = ou.headModelFill = headModel;
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
+      om.turnBridge = ou.turnBridge = turnBridge;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;

@@ -29,7 +29,12 @@
 //      back as the same map point instead of a new unmapped corner). Then the pose by P3P-RANSAC + robust LM on the
 //      tracks' map points (pnp_ransac.hpp);
 //      in turn mode a pose from as few as minTurnInliers points is accepted when its rotation
-//      agrees with the rays' (the map leaves the view faster than new points are made).
+//      agrees with the rays' (the map leaves the view faster than new points are made); when
+//      even that fails right after two posed frames, the TURN BRIDGE (turn_bridge.hpp, turnBridge)
+//      poses the frame from the last one: the step's direction from a head sphere (Δc ∝ Δz),
+//      the rotation from the tracks' epipolar geometry, the length from the map points still
+//      tracked and the tracks triangulated from the two posed frames; the frame becomes a
+//      keyframe, so the tracks born in the turn are triangulated and the map goes on.
 //   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
 //      an absolute count, after a maximum interval, or in turn mode after keyframeMaxRotationDeg
 //      of rotation (new corners only come at keyframes). REVISITS first (revisitSearch, on): the
@@ -110,6 +115,7 @@
 #include "hawor/slam/sequence_refine.hpp"
 #include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
+#include "hawor/slam/turn_bridge.hpp"
 #include "hawor/slam/turn_scale.hpp"
 #include "hawor/slam/two_view.hpp"
 
@@ -159,6 +165,16 @@ struct SlamOptions {
   int minTurnInliers = 10;                       ///< PnP inliers enough when the rays agree (turns)
   Scalar turnRotationAgreementDeg = Scalar(1);   ///< PnP vs tracked-ray rotation, for that
   bool fewPointsRayCheck = false;  ///< the same outside turn mode (measured: no gain on hands_cover)
+  /// Turn bridge (turn_bridge.hpp): in turn mode, a frame whose PnP fails right after two posed
+  /// frames is posed from the last one and the tracks between them (the step's direction from a
+  /// head sphere, the rotation from the tracks' epipolar geometry, the length from the map points
+  /// still tracked and the tracks triangulated from the two posed frames), at most
+  /// maxBridgeFrames in a row; it becomes a keyframe, so the tracks born in the turn are
+  /// triangulated and the map goes on instead of being reset.
+  bool turnBridge = true;
+  int maxBridgeFrames = 12;
+  Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
+  TurnBridgeOptions<Scalar> bridge;
   int lostFramesBeforeReset = 4;
   // Re-finding map points that left the tracks (covered by a hand, out of view and back).
   /// Recent keyframes whose pyramids are kept for it; 0 (default): off. Measured with 5
@@ -1103,6 +1119,13 @@ class MonoSlam {
                std::to_string(ok ? fr.inliers : 0) + " inliers, " + std::to_string(tracks_.size()) + " tracks");
     }
     if (ok) {
+      bridged_ = 0;
+    } else if (opt_.turnBridge && turning_ && f >= 2 && frames_[static_cast<std::size_t>(f - 1)].posed &&
+               frames_[static_cast<std::size_t>(f - 2)].posed && bridged_ < opt_.maxBridgeFrames) {
+      ok = bridgeTurn(f);
+      bridged_ = ok ? bridged_ + 1 : 0;
+    }
+    if (ok) {
       fr.posed = true;
       fr.status = SlamStatus::Tracked;
       lost_ = 0;
@@ -1161,6 +1184,67 @@ class MonoSlam {
       kfPyr_.clear();
       setReference(f);
     }
+  }
+
+  /// SlamOptions::turnBridge (turn_bridge.hpp): the pose of frame f from frame f − 1 and the
+  /// tracks between them. The length's points: the map points still tracked and every other
+  /// track seen in frames f − 2 and f − 1 (both posed), triangulated from those two.
+  bool bridgeTurn(int f) {
+    Frame& fr = frames_.back();
+    const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
+    const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
+    const SE3T T1cw = p1.T.inverse(), T2cw = p2.T.inverse();
+    const Scalar cosMin = std::cos(opt_.bridgeMinParallaxDeg * Constants<Scalar>::pi() / Scalar(180));
+    std::vector<V2> x1, x2, y;
+    std::vector<V3> X;
+    x1.reserve(tracks_.size()), x2.reserve(tracks_.size());
+    int fresh = 0;
+    // (Tracks added after the KLT step, by re-finding, have no previous position: the first
+    // prevUv_.size() are the tracked ones.)
+    for (std::size_t i = 0; i < std::min(tracks_.size(), prevUv_.size()); ++i) {
+      const Track& t = tracks_[i];
+      x1.push_back(normalised(prevUv_[i]));
+      x2.push_back(normalised(t.uv));
+      if (t.point >= 0 && points_[static_cast<std::size_t>(t.point)].valid) {
+        X.push_back(points_[static_cast<std::size_t>(t.point)].X);
+        y.push_back(x2.back());
+        continue;
+      }
+      // Its observation in frame f − 2 (observation lists are sorted by track id).
+      const auto it = std::lower_bound(p2.obsTrack.begin(), p2.obsTrack.end(), t.id);
+      if (it == p2.obsTrack.end() || *it != t.id) continue;
+      const Vec2f& u2 = p2.obsUv[static_cast<std::size_t>(it - p2.obsTrack.begin())];
+      const V2 x0 = normalised(u2);
+      const V3 r0 = p2.T.rotationMatrix() * V3(x0(0), x0(1), Scalar(1));
+      const V3 r1 = p1.T.rotationMatrix() * V3(x1.back()(0), x1.back()(1), Scalar(1));
+      if (r0.normalized().dot(r1.normalized()) > cosMin) continue;
+      V3 P;
+      if (!triangulateDLT(T2cw, T1cw, x0, x1.back(), P)) continue;
+      if (!((T2cw * P)(2) > Scalar(0)) || !((T1cw * P)(2) > Scalar(0))) continue;
+      X.push_back(P);
+      y.push_back(x2.back());
+      ++fresh;
+    }
+    // Predicted length: the last step's radius, |c₁ − c₂| / (2·sin(θ₁₂/2)), times 2·sin(θ/2)
+    // with θ the rays' rotation (none when the last step hardly turned).
+    Scalar step = Scalar(-1);
+    Mat3<Scalar> dR;
+    const Scalar th12 = rotationAngleDeg(p2.T, p1.T) * Constants<Scalar>::pi() / Scalar(180);
+    if (th12 > Scalar(2) * Constants<Scalar>::pi() / Scalar(180) && rayRotation(dR)) {
+      const Scalar th = SO3<Scalar>::fromMatrix(dR).log().norm();
+      step = (p1.T.translation() - p2.T.translation()).norm() / (Scalar(2) * std::sin(th12 / Scalar(2))) * Scalar(2) * std::sin(th / Scalar(2));
+    }
+    const TurnBridgeResult<Scalar> r = bridgeTurnPose(p1.T, x1, x2, X, y, cam_.fx, step, opt_.bridge);
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": turn bridge, " + std::to_string(x1.size()) + " tracks, " +
+               std::to_string(r.inliers) + " epipolar inliers, rotation moved " + std::to_string(double(r.rotationChangeDeg)) +
+               " deg from the rays', length " + std::to_string(double(r.length)) + " (predicted " + std::to_string(double(step)) + ") from " + std::to_string(r.pointInliers) + " of " +
+               std::to_string(X.size()) + " points (" + std::to_string(fresh) + " triangulated): " + (r.ok ? std::string("posed") : r.why));
+    }
+    if (!r.ok) return false;
+    fr.T = r.T_w_c;
+    fr.inliers = r.pointInliers;
+    return true;
   }
 
   /// SlamOptions::relocalise: the points of the kept keyframes searched under the frame's guess
@@ -1984,6 +2068,7 @@ class MonoSlam {
   bool havePrediction_ = false;
   bool turning_ = false;
   int turnUntil_ = -1;
+  int bridged_ = 0;  ///< frames posed by the turn bridge in a row
   // Scratch.
   std::vector<Vec2f> from_, to_, prevUv_, existing_, fresh_;
   std::vector<char> ok_;
