@@ -720,18 +720,8 @@ class MonoSlam {
       b.push_back(normalised(tracks_[i].uv));
     }
     if (a.size() < 8) return false;
-    std::vector<char> inl(a.size(), 1);
-    Mat3<Scalar> R = two_view_detail::rotationFromRays(a, b, inl, Mat3<Scalar>(Mat3<Scalar>::Identity()));
-    const Scalar cosT = std::cos(Scalar(3) * Constants<Scalar>::pi() / Scalar(180));
-    int kept = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      const V3 f1 = (R * V3(a[i](0), a[i](1), Scalar(1))).normalized();
-      const V3 f2 = V3(b[i](0), b[i](1), Scalar(1)).normalized();
-      inl[i] = f1.dot(f2) >= cosT ? 1 : 0;
-      kept += inl[i];
-    }
-    if (kept < 8) return false;
-    R = two_view_detail::rotationFromRays(a, b, inl, R);
+    Mat3<Scalar> R;
+    if (two_view_detail::rotationFromRaysReweighted(a, b, Scalar(3), R) < 8) return false;
     // rotationFromRays gives R21 (f2 ≈ R21·f1): camera 1 → camera 2 for directions, so
     // R_c1_c2 (c2w increment) = R21ᵀ.
     Rprev_cur = R.transpose();

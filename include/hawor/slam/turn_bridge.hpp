@@ -26,13 +26,13 @@
 #pragma once
 
 #include <Eigen/Cholesky>
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "hawor/common.hpp"
+#include "hawor/geometry/rotation.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/slam/two_view.hpp"
 
@@ -66,17 +66,7 @@ struct TurnBridgeResult {
 
 namespace turn_bridge_detail {
 
-inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
-  return S;
-}
-
-inline Eigen::Matrix3d expSO3(const Eigen::Vector3d& w) {
-  const double th = w.norm();
-  if (th < 1e-12) return Eigen::Matrix3d::Identity() + skew(w);
-  return Eigen::AngleAxisd(th, w / th).toRotationMatrix();
-}
+inline double angleDeg(const Eigen::Matrix3d& R) { return matrixToAxisAngle(R).norm() * 180.0 / 3.14159265358979323846; }
 
 /// Signed Sampson distance (normalised units) of a ↔ b under E.
 inline double sampson(const Eigen::Matrix3d& E, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -123,20 +113,17 @@ TurnBridgeResult<Scalar> bridgeTurnPose(const SE3<Scalar>& T_w_prev, const std::
   }
   const double f = double(focalPx), thr = double(opt.inlierPx) / f;
   // Rays' rotation (pure-rotation hypothesis), one 3° re-weighting pass.
-  std::vector<char> all(n, 1);
-  const M3d R0 = two_view_detail::rotationFromRays(x1, x2, all, Mat3<Scalar>(Mat3<Scalar>::Identity())).template cast<double>();
-  std::vector<char> rinl(n, 0);
-  const double cos3 = std::cos(3.0 * 3.14159265358979323846 / 180.0);
-  for (std::size_t i = 0; i < n; ++i) rinl[i] = (R0 * a[i]).normalized().dot(b[i].normalized()) >= cos3 ? 1 : 0;
-  M3d R = two_view_detail::rotationFromRays(x1, x2, rinl, Mat3<Scalar>(R0.cast<Scalar>())).template cast<double>();
+  Mat3<Scalar> Rs;
+  two_view_detail::rotationFromRaysReweighted(x1, x2, Scalar(3), Rs);
+  M3d R = Rs.template cast<double>();
   const M3d Rrays = R;
   const M3d Rw1 = T_w_prev.rotationMatrix().template cast<double>();
-  if (std::acos(std::max(-1.0, std::min(1.0, (R.trace() - 1) / 2))) * 180.0 / 3.14159265358979323846 < double(opt.minStepDeg)) {
+  if (angleDeg(R) < double(opt.minStepDeg)) {
     res.why = "too little turn for the direction";
     return res;
   }
   // Gauss–Newton on ω (R ← exp(ω)·R), t̂ = sphereDirection(R), Huber-weighted Sampson errors.
-  auto residual = [&](const M3d& Rm, std::size_t i, const V3d& t) { return sampson(skew(t) * Rm, a[i], b[i]); };
+  auto residual = [&](const M3d& Rm, std::size_t i, const V3d& t) { return sampson(hat(t) * Rm, a[i], b[i]); };  // E = [t]×·R
   auto cost = [&](const M3d& Rm) {
     V3d t;
     if (!sphereDirection(Rw1, Rm, t)) return 1e300;
@@ -160,7 +147,7 @@ TurnBridgeResult<Scalar> bridgeTurnPose(const SE3<Scalar>& T_w_prev, const std::
     for (int k = 0; k < 3; ++k) {
       V3d w = V3d::Zero();
       w(k) = h;
-      Rp[k] = expSO3(w) * R, Rm[k] = expSO3(-w) * R;
+      Rp[k] = axisAngleToMatrix(w) * R, Rm[k] = axisAngleToMatrix(V3d(-w)) * R;
       okd = okd && sphereDirection(Rw1, Rp[k], tp[k]) && sphereDirection(Rw1, Rm[k], tm[k]);
     }
     if (!okd) break;
@@ -179,7 +166,7 @@ TurnBridgeResult<Scalar> bridgeTurnPose(const SE3<Scalar>& T_w_prev, const std::
       A.diagonal() *= (1 + lambda);
       const V3d d = A.ldlt().solve(-g);
       if (!d.allFinite()) break;
-      const M3d Rn = expSO3(d) * R;
+      const M3d Rn = axisAngleToMatrix(d) * R;
       if (cost(Rn) < c0) {
         R = Rn, lambda = std::max(lambda * 0.3, 1e-9), improved = true;
         if (d.norm() < 1e-9) it = 10;
@@ -194,7 +181,7 @@ TurnBridgeResult<Scalar> bridgeTurnPose(const SE3<Scalar>& T_w_prev, const std::
     res.why = "no step direction";
     return res;
   }
-  res.rotationChangeDeg = Scalar(std::acos(std::max(-1.0, std::min(1.0, ((R * Rrays.transpose()).trace() - 1) / 2))) * 180.0 / 3.14159265358979323846);
+  res.rotationChangeDeg = Scalar(angleDeg(R * Rrays.transpose()));
   for (std::size_t i = 0; i < n; ++i) res.inliers += std::abs(residual(R, i, t)) <= thr ? 1 : 0;
   if (Scalar(res.inliers) < opt.minInlierRatio * Scalar(n)) {
     res.why = "too few epipolar inliers";

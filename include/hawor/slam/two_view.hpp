@@ -170,6 +170,26 @@ Mat3<Scalar> rotationFromRays(const std::vector<Vec2<Scalar>>& x1, const std::ve
   return (svd.matrixU() * D * svd.matrixV().transpose()).cast<Scalar>();
 }
 
+/// The rays' rotation with one re-weighting pass: Kabsch on all of them, then again on those whose
+/// rotated ray is within maxDeg of its match (a tracking error or the parallax of a near point
+/// would pull the fit). R = R21 (f2 ≈ R21·f1); returns how many rays the second fit kept.
+template <typename Scalar>
+int rotationFromRaysReweighted(const std::vector<Vec2<Scalar>>& x1, const std::vector<Vec2<Scalar>>& x2, Scalar maxDeg,
+                               Mat3<Scalar>& R) {
+  std::vector<char> inl(x1.size(), 1);
+  R = rotationFromRays(x1, x2, inl, Mat3<Scalar>(Mat3<Scalar>::Identity()));
+  const Scalar cosT = std::cos(maxDeg * Constants<Scalar>::pi() / Scalar(180));
+  int kept = 0;
+  for (std::size_t i = 0; i < x1.size(); ++i) {
+    const Vec3<Scalar> f1 = (R * Vec3<Scalar>(x1[i](0), x1[i](1), Scalar(1))).normalized();
+    const Vec3<Scalar> f2 = Vec3<Scalar>(x2[i](0), x2[i](1), Scalar(1)).normalized();
+    inl[i] = f1.dot(f2) >= cosT ? 1 : 0;
+    kept += inl[i];
+  }
+  R = rotationFromRays(x1, x2, inl, R);
+  return kept;
+}
+
 template <typename Scalar>
 struct MotionScore {
   int good = 0;                     ///< in front, reprojecting, parallax ≥ minPointParallaxDeg
