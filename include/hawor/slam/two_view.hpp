@@ -28,7 +28,11 @@
 //     Lustman 1988) that no two-view test can tell apart; a camera position off the pair's line
 //     of motion generally fits only the true plane. The candidate whose cost is at most
 //     ambiguityRatio × the next one's wins; otherwise Ambiguous.
-//  4. Parallax: the median parallax of the best motion's points (all in front, any parallax) must
+//  4. In front: at least minInFrontRatio of the model's inliers must be in front of both cameras
+//     and reproject under the best motion (any parallax; ORB-SLAM's 0.9·N), else NotEnoughInliers
+//     with the rays' rotation: a group of tracks that jumped together can make a wrong motion the
+//     best-scoring one, with its own large parallax and depths of a few baselines.
+//     Parallax: the median parallax of the best motion's points (all in front, any parallax) must
 //     reach minParallaxDeg, else NotEnoughParallax. When no motion triangulates enough points,
 //     the rotation-compensated ray angle ∠(x1, R21ᵀ·x2) (the triangulation angle for exact data)
 //     is taken at the median over the inliers for each rotation the model allows (for H also the
@@ -90,6 +94,9 @@ struct TwoViewOptions {
   Scalar minPointParallaxDeg = Scalar(0.5);  ///< parallax of a point to be triangulated
   Scalar maxReprojPx = Scalar(2);          ///< per-view reprojection error of a triangulated point
   int minTriangulated = 30;
+  /// Inliers in front of both cameras and reprojecting (any parallax) under the best motion, at
+  /// least this fraction of the model's inliers (ORB-SLAM: 0.9, with a looser reprojection test).
+  Scalar minInFrontRatio = Scalar(0.7);
   Scalar ambiguityRatio = Scalar(0.75);
   int minThirdView = 20;                ///< observations of a candidate's points a further view needs to score it
   bool refine = true;
@@ -106,6 +113,7 @@ struct TwoViewResult {
   std::vector<Vec3<Scalar>> points;    ///< camera-1 frame; meaningful where triangulated[i]
   std::vector<char> triangulated;
   int numTriangulated = 0;
+  int numInFront = 0;                  ///< inliers in front of both cameras and reprojecting, any parallax (best motion)
   /// Median parallax (degrees): of the triangulated points when a motion was found; otherwise the
   /// median over the inliers of the rotation-compensated ray angle ∠(x1, R21ᵀx2).
   Scalar medianParallaxDeg = Scalar(0);
@@ -491,7 +499,17 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
     return res;
   }
   auto& B = scores[static_cast<std::size_t>(best)];
+  res.numInFront = static_cast<int>(B.parallaxDeg.size());
   res.medianParallaxDeg = two_view_detail::median(B.parallaxDeg);
+  if (Scalar(res.numInFront) < opt.minInFrontRatio * Scalar(res.numInliers)) {
+    // Most inliers behind a camera or off their rays under the best motion: a wrong motion
+    // (ORB-SLAM's 0.9·N test). A translation below the rotation's noise gives such a motion its
+    // own fake parallax, with depths a few baselines deep (fast_turns, 1-2 cm steps at 3 m).
+    res.status = TwoViewStatus::NotEnoughInliers;
+    const Mat3<Scalar> R = rotationFromRays(x1, x2, inl, Rc[best]);
+    res.T_c1_c2 = SE3<Scalar>(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R.transpose())), Vec3<Scalar>::Zero());
+    return res;
+  }
   if (res.medianParallaxDeg < opt.minParallaxDeg) {
     res.status = TwoViewStatus::NotEnoughParallax;
     const Mat3<Scalar> R = rotationFromRays(x1, x2, inl, Rc[best]);
