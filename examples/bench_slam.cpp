@@ -7,6 +7,7 @@
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge]
+//              [--max-ray-jump DEG] [--no-front-check]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image)
@@ -19,6 +20,8 @@
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
+//   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
+//   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -70,7 +73,8 @@ int main(int argc, char** argv) {
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
   bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true, thirdView = true,
-       turnBridge = true;
+       turnBridge = true, frontCheck = true;
+  double maxRayJump = -1;  // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -116,8 +120,13 @@ int main(int argc, char** argv) {
       thirdView = false;
     } else if (a == "--no-turn-bridge") {
       turnBridge = false;
+    } else if (a == "--max-ray-jump") {
+      maxRayJump = std::stod(next());
+
+    } else if (a == "--no-front-check") {
+      frontCheck = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check]\n");
       return 2;
     }
   }
@@ -160,6 +169,8 @@ int main(int argc, char** argv) {
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
       om.turnBridge = ou.turnBridge = turnBridge;
+      if (maxRayJump >= 0) om.maxRayJumpDeg = ou.maxRayJumpDeg = maxRayJump;
+      if (!frontCheck) om.twoView.minInFrontRatio = ou.twoView.minInFrontRatio = 0;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;

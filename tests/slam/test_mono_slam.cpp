@@ -136,7 +136,11 @@ TEST_CASE("MonoSlam: fast head turns, the map is built within the first turn (tu
   }
   INFO("first keyframe at frame " << first);
   CHECK(first <= 55);
-  CHECK(r.result.count(hawor::SlamStatus::Tracked) >= n / 2);
+  // 49 frames tracked (the first map at frame 47, the second turn re-initialising at 77); 100
+  // before tracks that jump off the rays' rotation were dropped (SlamOptions::maxRayJumpDeg),
+  // which made these 100 frames 1.4 -> 6.3 % of the path and fast_turns seeds 1-8 better on
+  // the whole (README, "SLAM benchmark").
+  CHECK(r.result.count(hawor::SlamStatus::Tracked) >= n * 45 / 100);
   for (const auto& T : r.result.poses) CHECK(T.translation().allFinite());
   // Loose: the second turn still re-initialises here (see the README's SLAM benchmark).
   const double ate = ateMetres(r);

@@ -21,7 +21,10 @@
 //      initMinRotationDeg of rotation (the rays' rotation absorbs most of the parallax of the
 //      neck's sideways translation, so the compensated flow understates it). The rotation of
 //      not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
-//      hypothesis) with the position held.
+//      hypothesis) with the position held; a track more than maxRayJumpDeg off that rotation
+//      jumped (KLT locked onto a weak texture off the true match at a turn's onset) and is
+//      dropped, and a two-view whose best motion puts fewer than minInFrontRatio of its inliers
+//      in front of both cameras is refused (two_view.hpp).
 //      With a map: RE-FINDING first (optional, off by default) while fewer than refindBelow map
 //      points are tracked: the points of the last refindKeyframes keyframes (their pyramids are
 //      kept) that no track follows are projected under the predicted pose and searched by KLT
@@ -176,6 +179,13 @@ struct SlamOptions {
   Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
   TurnBridgeOptions<Scalar> bridge;
   int lostFramesBeforeReset = 4;
+  /// Before a map, tracks more than this far off the frame's rotation from the rays are dropped
+  /// (dropJumpedTracks); 0: off. Measured on fast_turns seeds 1-8 (bench_slam, masked /
+  /// unmasked ATE sums, 300 frames and the first 100): 5° 21.3 / 19.0 and 39.9 / 29.2, 6° 22.7 /
+  /// 19.9 and 29.1 / 17.9, 8° 30.1 / 18.6 and 38.4 / 41.6, off 29.6 / 22.4 and 38.4 / 38.9. Near
+  /// points in a 15°-a-frame turn (the eye 2 cm a frame about the neck) move 4-5° off the rays'
+  /// rotation, and a lower bound drops them.
+  Scalar maxRayJumpDeg = Scalar(6);
   // Re-finding map points that left the tracks (covered by a hand, out of view and back).
   /// Recent keyframes whose pyramids are kept for it; 0 (default): off. Measured with 5
   /// (bench_slam, seeds 1-2, masked, an earlier joinOldMap on): no preset consistently better
@@ -728,6 +738,27 @@ class MonoSlam {
     return true;
   }
 
+  /// Before a map: a track whose ray is more than maxRayJumpDeg off the frame's rotation from
+  /// the rays (f2 ≈ dRᵀ·f1) jumped — KLT locked onto a repeated or weak texture one period off
+  /// at the onset of a turn, where the prediction lags — and is dropped: such tracks move
+  /// together and give the two-view a coherent wrong motion (fast_turns seed 6 frame 25: 37 of 85
+  /// tracks 40–160 px off). A frame's parallax from the head's translation is a few pixels.
+  void dropJumpedTracks(const Mat3<Scalar>& dR) {
+    if (!(opt_.maxRayJumpDeg > Scalar(0)) || prevUv_.size() != tracks_.size()) return;
+    const Scalar cosMax = std::cos(opt_.maxRayJumpDeg * Constants<Scalar>::pi() / Scalar(180));
+    const Mat3<Scalar> R21 = dR.transpose();
+    std::vector<char> drop(tracks_.size(), 0);
+    int n = 0;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      const V2 a = normalised(prevUv_[i]), b = normalised(tracks_[i].uv);
+      const V3 f1 = (R21 * V3(a(0), a(1), Scalar(1))).normalized(), f2 = V3(b(0), b(1), Scalar(1)).normalized();
+      if (f1.dot(f2) < cosMax) drop[i] = 1, ++n;
+    }
+    if (n == 0) return;
+    if (opt_.log) opt_.log("frame " + std::to_string(frames_.size() - 1) + ": " + std::to_string(n) + " tracks jumped off the rays' rotation, dropped");
+    removeTracks(drop);
+  }
+
   // ---------------------------------------------------------------- initialisation
   void initialise(int f) {
     Frame& fr = frames_.back();
@@ -736,6 +767,7 @@ class MonoSlam {
     if (rayRotation(dR)) {
       fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(frames_[static_cast<std::size_t>(f - 1)].T.rotationMatrix() * dR)),
                   frames_[static_cast<std::size_t>(f - 1)].T.translation());
+      dropJumpedTracks(dR);
     } else {
       fr.rotationKnown = false;
     }
@@ -884,6 +916,11 @@ class MonoSlam {
       if (!d.empty()) {
         std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
         s = lastMedianDepth_ / d[d.size() / 2];
+        if (opt_.log) {
+          opt_.log("frame " + std::to_string(f) + ": new segment scaled by the median depth: " + std::to_string(double(lastMedianDepth_)) +
+                   " (last map) / " + std::to_string(double(d[d.size() / 2])) + " (two-view, " + std::to_string(d.size()) +
+                   " points) = " + std::to_string(double(s)));
+        }
       }
     }
     auto toWorld = [&](const V3& x) { return V3(Tref * V3(s * x)); };
