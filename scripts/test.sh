@@ -95,19 +95,41 @@ run_browser_suite() {
   echo "=== [browser] done in $((SECONDS - t0)) s" >&2
 }
 
+# run_sanitize_suite: the parsers under ASan + UBSan (its own build folder, nothing shared).
+run_sanitize_suite() {
+  if command -v clang++ >/dev/null; then
+    run_suite sanitize env CC=clang CXX=clang++ cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_FUZZ=ON -DHAWOR_BUILD_EXAMPLES=OFF
+  else
+    run_suite sanitize cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_BUILD_EXAMPLES=OFF
+  fi
+}
+
 # The native suite builds with clang when installed (the sanitizer and WebAssembly builds use it
 # too): clang 14 compiles this Eigen-heavy template code at -O1 in ~0.55x g++ 12's CPU time
 # (test_motion's unity file: 71 s vs 127 s). scripts/demo.sh makes the same choice, so the two
 # share build/native. HAWOR_NATIVE_CXX=g++ (or any compiler) overrides it.
 run_suite native env $(native_compiler_env) cmake -DCMAKE_BUILD_TYPE=Release
-if command -v clang++ >/dev/null; then
-  run_suite sanitize env CC=clang CXX=clang++ cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_FUZZ=ON -DHAWOR_BUILD_EXAMPLES=OFF
-else
-  run_suite sanitize cmake -DCMAKE_BUILD_TYPE=Debug -DHAWOR_SANITIZE=ON -DHAWOR_BUILD_EXAMPLES=OFF
-fi
 run_suite wasm emcmake cmake -DCMAKE_BUILD_TYPE=Release
-# after the WebAssembly build: the pipeline tests (tests/web/pipeline.test.mjs) run its hawor_core.mjs
+# The sanitizer stage runs beside the node suite (after the WebAssembly build: the pipeline tests,
+# tests/web/pipeline.test.mjs, run its hawor_core.mjs), which leaves about a fifth of two cores
+# idle while its files wait on their child processes. Its output is printed when both are done;
+# its tallies come back through a file (a background subshell has its own counters).
+rm -f "$log_dir/sanitize.tally"
+(
+  total_pass=0 total_fail=0 status=0
+  run_sanitize_suite
+  echo "$total_pass $total_fail $status" >"$log_dir/sanitize.tally"
+) >"$log_dir/sanitize-stage.log" 2>&1 &
+sanitize_pid=$!
 run_node_suite
+wait "$sanitize_pid"
+cat "$log_dir/sanitize-stage.log"
+if [[ -f "$log_dir/sanitize.tally" ]] && read -r sp sf ss <"$log_dir/sanitize.tally"; then
+  total_pass=$((total_pass + sp)); total_fail=$((total_fail + sf))
+  ((ss == 0)) || status=1
+else
+  echo "[sanitize] no tally" >&2; total_fail=$((total_fail + 1)); status=1
+fi
 run_browser_suite
 
 echo "$total_pass passed, $total_fail failed"
