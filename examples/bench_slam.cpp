@@ -122,7 +122,6 @@ int main(int argc, char** argv) {
       turnBridge = false;
     } else if (a == "--max-ray-jump") {
       maxRayJump = std::stod(next());
-
     } else if (a == "--no-front-check") {
       frontCheck = false;
     } else {

@@ -750,9 +750,7 @@ class MonoSlam {
     std::vector<char> drop(tracks_.size(), 0);
     int n = 0;
     for (std::size_t i = 0; i < tracks_.size(); ++i) {
-      const V2 a = normalised(prevUv_[i]), b = normalised(tracks_[i].uv);
-      const V3 f1 = (R21 * V3(a(0), a(1), Scalar(1))).normalized(), f2 = V3(b(0), b(1), Scalar(1)).normalized();
-      if (f1.dot(f2) < cosMax) drop[i] = 1, ++n;
+      if (two_view_detail::rotatedRayCos(R21, normalised(prevUv_[i]), normalised(tracks_[i].uv)) < cosMax) drop[i] = 1, ++n;
     }
     if (n == 0) return;
     if (opt_.log) opt_.log("frame " + std::to_string(frames_.size() - 1) + ": " + std::to_string(n) + " tracks jumped off the rays' rotation, dropped");

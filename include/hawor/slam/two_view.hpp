@@ -178,6 +178,14 @@ Mat3<Scalar> rotationFromRays(const std::vector<Vec2<Scalar>>& x1, const std::ve
   return (svd.matrixU() * D * svd.matrixV().transpose()).cast<Scalar>();
 }
 
+/// cos ∠(R·f1, f2) of unit rays f = (x, 1)/‖(x, 1)‖: how far a match is from the rotation R.
+template <typename Scalar>
+Scalar rotatedRayCos(const Mat3<Scalar>& R, const Vec2<Scalar>& x1, const Vec2<Scalar>& x2) {
+  const Vec3<Scalar> f1 = (R * Vec3<Scalar>(x1(0), x1(1), Scalar(1))).normalized();
+  const Vec3<Scalar> f2 = Vec3<Scalar>(x2(0), x2(1), Scalar(1)).normalized();
+  return f1.dot(f2);
+}
+
 /// The rays' rotation with one re-weighting pass: Kabsch on all of them, then again on those whose
 /// rotated ray is within maxDeg of its match (a tracking error or the parallax of a near point
 /// would pull the fit). R = R21 (f2 ≈ R21·f1); returns how many rays the second fit kept.
@@ -189,9 +197,7 @@ int rotationFromRaysReweighted(const std::vector<Vec2<Scalar>>& x1, const std::v
   const Scalar cosT = std::cos(maxDeg * Constants<Scalar>::pi() / Scalar(180));
   int kept = 0;
   for (std::size_t i = 0; i < x1.size(); ++i) {
-    const Vec3<Scalar> f1 = (R * Vec3<Scalar>(x1[i](0), x1[i](1), Scalar(1))).normalized();
-    const Vec3<Scalar> f2 = Vec3<Scalar>(x2[i](0), x2[i](1), Scalar(1)).normalized();
-    inl[i] = f1.dot(f2) >= cosT ? 1 : 0;
+    inl[i] = rotatedRayCos(R, x1[i], x2[i]) >= cosT ? 1 : 0;
     kept += inl[i];
   }
   R = rotationFromRays(x1, x2, inl, R);
@@ -501,17 +507,13 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
   auto& B = scores[static_cast<std::size_t>(best)];
   res.numInFront = static_cast<int>(B.parallaxDeg.size());
   res.medianParallaxDeg = two_view_detail::median(B.parallaxDeg);
-  if (Scalar(res.numInFront) < opt.minInFrontRatio * Scalar(res.numInliers)) {
-    // Most inliers behind a camera or off their rays under the best motion: a wrong motion
-    // (ORB-SLAM's 0.9·N test). A translation below the rotation's noise gives such a motion its
-    // own fake parallax, with depths a few baselines deep (fast_turns, 1-2 cm steps at 3 m).
-    res.status = TwoViewStatus::NotEnoughInliers;
-    const Mat3<Scalar> R = rotationFromRays(x1, x2, inl, Rc[best]);
-    res.T_c1_c2 = SE3<Scalar>(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R.transpose())), Vec3<Scalar>::Zero());
-    return res;
-  }
-  if (res.medianParallaxDeg < opt.minParallaxDeg) {
-    res.status = TwoViewStatus::NotEnoughParallax;
+  // Most inliers behind a camera or off their rays under the best motion: a wrong motion
+  // (ORB-SLAM's 0.9·N test). A translation below the rotation's noise gives such a motion its own
+  // fake parallax, with depths a few baselines deep (fast_turns, 1-2 cm steps at 3 m). Refused,
+  // like too little parallax, with the rays' rotation and no translation.
+  const bool behind = Scalar(res.numInFront) < opt.minInFrontRatio * Scalar(res.numInliers);
+  if (behind || res.medianParallaxDeg < opt.minParallaxDeg) {
+    res.status = behind ? TwoViewStatus::NotEnoughInliers : TwoViewStatus::NotEnoughParallax;
     const Mat3<Scalar> R = rotationFromRays(x1, x2, inl, Rc[best]);
     res.T_c1_c2 = SE3<Scalar>(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R.transpose())), Vec3<Scalar>::Zero());
     return res;
