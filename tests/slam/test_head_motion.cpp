@@ -227,3 +227,99 @@ TEST_CASE("fitHeadJoin: a second map segment's scale and offset from one head mo
   for (int i = 0; i < 40; ++i) still.push_back(120);
   CHECK_FALSE(hawor::fitHeadJoin(T, idxA, still).ok);
 }
+
+TEST_CASE("fitHeadJoinAll: three map segments at once, the reference in the middle", "[slam][head]") {
+  // Frames 0-89, 90-179 (the reference), 180-269: the outer two in maps of their own
+  // ((c − o_k)/s_k), rotations continuous; a head pivoting about one neck joint (the model holds).
+  Rng rng(23);
+  const std::vector<hawor::SE3<double>> truth = standingTurns(rng, 270, Eigen::Vector3d(-0.6, 0.2, 1.5), true);
+  const double sTrue[3] = {0.45, 1.0, 3.2};
+  const Eigen::Vector3d oTrue[3] = {Eigen::Vector3d(0.2, -0.1, 0.3), Eigen::Vector3d::Zero(), Eigen::Vector3d(-1.0, 0.4, 0.0)};
+  std::vector<hawor::SE3<double>> T = truth;
+  std::vector<std::vector<int>> groups(3);
+  for (int i = 0; i < 270; ++i) {
+    const int k = i / 90;
+    groups[static_cast<std::size_t>(k)].push_back(i);
+    T[static_cast<std::size_t>(i)] = hawor::SE3<double>(
+        truth[static_cast<std::size_t>(i)].rotation(),
+        hawor::Vec3<double>((Eigen::Vector3d(truth[static_cast<std::size_t>(i)].translation()) - oTrue[k]) / sTrue[k]));
+  }
+  const hawor::HeadJoinAll<double> j = hawor::fitHeadJoinAll(T, groups, 1);
+  REQUIRE(j.ok);
+  REQUIRE(j.s.size() == 3);
+  CHECK(j.s[1] == 1.0);
+  CHECK(Eigen::Vector3d(j.t[1]).norm() == 0.0);
+  for (int k : {0, 2}) {
+    CHECK(j.s[static_cast<std::size_t>(k)] == Approx(sTrue[k]).epsilon(0.02));
+    double worst = 0;
+    for (int i : groups[static_cast<std::size_t>(k)]) {
+      const Eigen::Vector3d back = j.s[static_cast<std::size_t>(k)] * Eigen::Vector3d(T[static_cast<std::size_t>(i)].translation()) +
+                                   Eigen::Vector3d(j.t[static_cast<std::size_t>(k)]);
+      worst = std::max(worst, (back - Eigen::Vector3d(truth[static_cast<std::size_t>(i)].translation())).norm());
+    }
+    INFO("segment " << k);
+    CHECK(worst < 0.005);
+  }
+  // Against the dense solve of the same 20 unknowns (n, M, then s, t of segments 0 and 2), QR.
+  const hawor::HeadModelOptions<double> opt;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * 270 + 9, 20);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(3 * 270 + 9);
+  int r = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (int i : groups[static_cast<std::size_t>(k)]) {
+      const Eigen::Vector3d z = T[static_cast<std::size_t>(i)].rotationMatrix().col(2);
+      const Eigen::Vector3d c = T[static_cast<std::size_t>(i)].translation();
+      for (int d = 0; d < 3; ++d, ++r) {
+        A(r, d) = 1.0;
+        A.block(r, 3 + 3 * d, 1, 3) = z.transpose();
+        if (k == 1) {
+          b(r) = c(d);
+        } else {
+          const int c0 = k == 0 ? 12 : 16;
+          A(r, c0) = -c(d);
+          A(r, c0 + 1 + d) = -1.0;
+        }
+      }
+    }
+  }
+  const double lam = std::sqrt(opt.ridge * 270.0);
+  for (int k = 0; k < 9; ++k, ++r) A(r, 3 + k) = lam;
+  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  CHECK(j.s[0] == Approx(x(12)).epsilon(1e-6));
+  CHECK(j.s[2] == Approx(x(16)).epsilon(1e-6));
+  CHECK((Eigen::Vector3d(j.t[0]) - x.segment<3>(13)).norm() < 1e-6);
+  CHECK((Eigen::Vector3d(j.t[2]) - x.segment<3>(17)).norm() < 1e-6);
+  // A segment without a turn (its scale undetermined), one too short, a bad reference: not used.
+  std::vector<std::vector<int>> still = groups;
+  still[2].assign(40, 200);
+  CHECK_FALSE(hawor::fitHeadJoinAll(T, still, 1).ok);
+  std::vector<std::vector<int>> shortSeg = groups;
+  shortSeg[0].resize(10);
+  CHECK_FALSE(hawor::fitHeadJoinAll(T, shortSeg, 1).ok);
+  CHECK_FALSE(hawor::fitHeadJoinAll(T, groups, 3).ok);
+  CHECK_FALSE(hawor::fitHeadJoinAll(T, {groups[0]}, 0).ok);
+  // A walk (the position follows no head model): the tests refuse the joint model.
+  std::vector<hawor::SE3<double>> W = T;
+  for (int i = 0; i < 270; ++i) {
+    W[static_cast<std::size_t>(i)] = hawor::SE3<double>(T[static_cast<std::size_t>(i)].rotation(),
+                                                        hawor::Vec3<double>(0.03 * i + 0.1 * std::sin(0.05 * i), 0.5 * std::sin(0.02 * i), 1.6));
+  }
+  CHECK_FALSE(hawor::fitHeadJoinAll(W, groups, 1).ok);
+}
+
+TEST_CASE("fitHeadJoinAll<float>", "[slam][head]") {
+  Rng rng(29);
+  const std::vector<hawor::SE3<double>> truth = standingTurns(rng, 180, Eigen::Vector3d(0.4, 0.2, 1.6), true);
+  std::vector<hawor::SE3<float>> T;
+  std::vector<std::vector<int>> groups(2);
+  for (int i = 0; i < 180; ++i) {
+    Eigen::Vector3d c = truth[static_cast<std::size_t>(i)].translation();
+    if (i >= 90) c = c / 2.0;
+    groups[static_cast<std::size_t>(i / 90)].push_back(i);
+    T.push_back(hawor::SE3<float>(hawor::SO3<float>::fromMatrix(hawor::Mat3<float>(truth[static_cast<std::size_t>(i)].rotationMatrix().cast<float>())),
+                                  hawor::Vec3<float>(c.cast<float>())));
+  }
+  const hawor::HeadJoinAll<float> j = hawor::fitHeadJoinAll(T, groups, 0);
+  REQUIRE(j.ok);
+  CHECK(j.s[1] == Approx(2.0f).epsilon(0.03));
+}

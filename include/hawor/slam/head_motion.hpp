@@ -21,6 +21,9 @@
 // minSpreadDeg), where it has the shape of a head (the eye in front of the neck along the view,
 // M·z ∥ z, at a steady distance) and the head turns across the gap (minGapTurnDeg): walking, or
 // a body that sways while the view wanders, fails and keeps the interpolation.
+// The same model joins map segments (a monocular map re-initialised after a loss has a scale and
+// origin of its own): fitHeadJoinAll solves one model and each segment's similarity s_k·c + t_k
+// together, linear in all unknowns; fitHeadJoin is its two-segment case.
 // Pure functions, thread-safe.
 #pragma once
 
@@ -215,9 +218,124 @@ int fillGapsByHeadModel(std::vector<SE3<Scalar>>& T, const std::vector<char>& po
   return changed;
 }
 
-/// Two map segments of one standing head (a monocular map re-initialised after a loss has a
-/// scale of its own): segment B's positions mapped into segment A's units, s·c + t, such that
-/// one head model explains both (rotations are continuous across the reset: the tracked rays).
+/// Map segments of one standing head (a monocular map re-initialised after a loss has a scale of
+/// its own): each segment k's positions mapped into the reference segment's units, s_k·c + t_k,
+/// such that one head model explains them all (rotations are continuous across the resets: the
+/// tracked rays). The reference has s = 1, t = 0.
+template <typename Scalar>
+struct HeadJoinAll {
+  bool ok = false;                    ///< solved and every test of the file comment passed
+  std::vector<Scalar> s;              ///< per segment, in the reference's units
+  std::vector<Vec3<Scalar>> t;
+  HeadModelFit<Scalar> fit;           ///< the joint model (reference units) and its quality
+  std::vector<Scalar> spreadDeg;      ///< each segment's view spread
+};
+
+/// Joint least squares over x = (n, M, s_k, t_k for k ≠ ref) (12 + 4·(K − 1) unknowns, a ridge on
+/// M): rows c_i = n + M·z_i for the frames groups[ref] of the reference segment and
+/// 0 = n + M·z_i − s_k·c_i − t_k for the frames groups[k] of segment k. Accepted (ok) when the
+/// joint model passes the head tests of fillGapsByHeadModel (R² over all frames, motion R² within
+/// each segment, the eye in front, a steady radius), each segment has opt.minFrames frames with
+/// views spread over minSpreadDeg (its own scale is then determined) and every s_k is positive.
+template <typename Scalar>
+HeadJoinAll<Scalar> fitHeadJoinAll(const std::vector<SE3<Scalar>>& T, const std::vector<std::vector<int>>& groups, int ref,
+                                   const HeadModelOptions<Scalar>& opt = {}) {
+  using V3 = Eigen::Matrix<Scalar, 3, 1>;
+  using MX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  using VX = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+  const int K = static_cast<int>(groups.size());
+  HeadJoinAll<Scalar> J;
+  J.s.assign(static_cast<std::size_t>(K), Scalar(1));
+  J.t.assign(static_cast<std::size_t>(K), V3::Zero());
+  J.spreadDeg.assign(static_cast<std::size_t>(K), Scalar(0));
+  if (K < 2 || ref < 0 || ref >= K) return J;
+  for (const std::vector<int>& g : groups) {
+    if (static_cast<int>(g.size()) < opt.minFrames) return J;
+  }
+  auto cOf = [&](int i) { return V3(T[static_cast<std::size_t>(i)].translation()); };
+  auto zOf = [&](int i) { return V3(T[static_cast<std::size_t>(i)].rotationMatrix().col(2)); };
+  // Each segment's positions centred on its mean (conditioning); the offsets go back into t.
+  std::vector<V3> mean(static_cast<std::size_t>(K), V3::Zero());
+  for (int k = 0; k < K; ++k) {
+    for (int i : groups[static_cast<std::size_t>(k)]) mean[static_cast<std::size_t>(k)] += cOf(i);
+    mean[static_cast<std::size_t>(k)] /= Scalar(groups[static_cast<std::size_t>(k)].size());
+  }
+  std::vector<int> col(static_cast<std::size_t>(K), -1);  // first unknown (s_k) of segment k
+  int nx = 12;
+  for (int k = 0; k < K; ++k) {
+    if (k != ref) col[static_cast<std::size_t>(k)] = nx, nx += 4;
+  }
+  MX N = MX::Zero(nx, nx);
+  VX g = VX::Zero(nx);
+  Eigen::Matrix<Scalar, 3, Eigen::Dynamic> R(3, nx);
+  Scalar nObs = 0;
+  for (int k = 0; k < K; ++k) {
+    const int c0 = col[static_cast<std::size_t>(k)];
+    for (int i : groups[static_cast<std::size_t>(k)]) {
+      R.setZero();
+      R.template leftCols<3>().setIdentity();
+      const V3 z = zOf(i);
+      for (int r = 0; r < 3; ++r) R.template block<1, 3>(r, 3 + 3 * r) = z.transpose();
+      const V3 c = cOf(i) - mean[static_cast<std::size_t>(k)];
+      if (k == ref) {
+        g += R.transpose() * c;
+      } else {
+        R.col(c0) = -c;
+        R.template block<3, 3>(0, c0 + 1) = -Eigen::Matrix<Scalar, 3, 3>::Identity();
+      }
+      N += R.transpose() * R;
+      nObs += Scalar(1);
+    }
+  }
+  for (int k = 3; k < 12; ++k) N(k, k) += opt.ridge * nObs;
+  const Eigen::LDLT<MX> ldlt(N);
+  if (ldlt.info() != Eigen::Success) return J;
+  const VX x = ldlt.solve(g);
+  if (!x.allFinite()) return J;
+  // Segment k's rows were written for s·(c − c̄_k) + t' = n' + M·z with n' = n − c̄_ref:
+  // t = t' + c̄_ref − s·c̄_k.
+  for (int k = 0; k < K; ++k) {
+    const int c0 = col[static_cast<std::size_t>(k)];
+    if (c0 < 0) continue;
+    J.s[static_cast<std::size_t>(k)] = x(c0);
+    J.t[static_cast<std::size_t>(k)] = V3(x.template segment<3>(c0 + 1)) + mean[static_cast<std::size_t>(ref)] - x(c0) * mean[static_cast<std::size_t>(k)];
+    if (!(x(c0) > Scalar(0))) return J;
+  }
+  // The joint model's quality on all frames in the reference's units (fitHeadModel's measures).
+  std::vector<SE3<Scalar>> U(T.begin(), T.end());
+  std::vector<int> all;
+  for (int k = 0; k < K; ++k) {
+    for (int i : groups[static_cast<std::size_t>(k)]) {
+      U[static_cast<std::size_t>(i)] = SE3<Scalar>(T[static_cast<std::size_t>(i)].rotation(),
+                                                   V3(J.s[static_cast<std::size_t>(k)] * cOf(i) + J.t[static_cast<std::size_t>(k)]));
+      all.push_back(i);
+    }
+  }
+  std::sort(all.begin(), all.end());
+  J.fit = fitHeadModel(U, all, opt);
+  // Motion R² within each segment only (the lag never straddles a reset); each one's spread.
+  Scalar motion = Scalar(1), spread = Scalar(180);
+  for (int k = 0; k < K; ++k) {
+    const std::vector<int>& idx = groups[static_cast<std::size_t>(k)];
+    J.spreadDeg[static_cast<std::size_t>(k)] = fitHeadModel(U, idx, opt).spreadDeg;
+    spread = std::min(spread, J.spreadDeg[static_cast<std::size_t>(k)]);
+    Scalar dres = 0, dvar = 0;
+    for (std::size_t a = 0, b = 0; a < idx.size(); ++a) {
+      while (b < idx.size() && idx[b] < idx[a] + opt.lag) ++b;
+      if (b >= idx.size() || idx[b] != idx[a] + opt.lag) continue;
+      const V3 dc = V3(U[static_cast<std::size_t>(idx[b])].translation()) - V3(U[static_cast<std::size_t>(idx[a])].translation());
+      dres += (dc - J.fit.M * (zOf(idx[b]) - zOf(idx[a]))).squaredNorm();
+      dvar += dc.squaredNorm();
+    }
+    motion = std::min(motion, dvar > Scalar(0) ? Scalar(1) - dres / dvar : Scalar(0));
+  }
+  J.fit.motionR2 = motion;
+  J.ok = J.fit.ok && J.fit.r2 >= opt.minR2 && J.fit.motionR2 >= opt.minMotionR2 && J.fit.frontCos >= opt.minFrontCos &&
+         J.fit.radiusSpread <= opt.maxRadiusSpread && spread >= opt.minSpreadDeg;
+  return J;
+}
+
+/// Two map segments (fitHeadJoinAll with K = 2, A the reference): B's positions into A's units.
 template <typename Scalar>
 struct HeadJoin {
   bool ok = false;            ///< solved and every test of the file comment passed
@@ -227,83 +345,17 @@ struct HeadJoin {
   Scalar spreadA = Scalar(0), spreadB = Scalar(0);  ///< each segment's view spread (degrees)
 };
 
-/// Joint least squares over x = (n, M, s, t) (16 unknowns, a ridge on M): rows c_i = n + M·z_i
-/// for the frames idxA of segment A, and 0 = n + M·z_i − s·c_i − t for the frames idxB of
-/// segment B. Accepted (ok) when the joint model passes the head tests of fillGapsByHeadModel
-/// (R², motion R² within each segment, the eye in front, a steady radius), each segment's views
-/// spread over minSpreadDeg (its own scale is then determined) and s is positive.
 template <typename Scalar>
 HeadJoin<Scalar> fitHeadJoin(const std::vector<SE3<Scalar>>& T, const std::vector<int>& idxA, const std::vector<int>& idxB,
                              const HeadModelOptions<Scalar>& opt = {}) {
-  using V3 = Eigen::Matrix<Scalar, 3, 1>;
-  using M16 = Eigen::Matrix<Scalar, 16, 16>;
-  using V16 = Eigen::Matrix<Scalar, 16, 1>;
+  const HeadJoinAll<Scalar> all = fitHeadJoinAll(T, {idxA, idxB}, 0, opt);
   HeadJoin<Scalar> J;
-  if (static_cast<int>(idxA.size()) < opt.minFrames || static_cast<int>(idxB.size()) < opt.minFrames) return J;
-  // Centre A's positions (conditioning); the offset is added back to t.
-  V3 ca = V3::Zero(), cb = V3::Zero();
-  for (int i : idxA) ca += T[static_cast<std::size_t>(i)].translation();
-  for (int i : idxB) cb += T[static_cast<std::size_t>(i)].translation();
-  ca /= Scalar(idxA.size());
-  cb /= Scalar(idxB.size());
-  M16 N = M16::Zero();
-  V16 g = V16::Zero();
-  Eigen::Matrix<Scalar, 3, 16> R;
-  auto zOf = [&](int i) { return V3(T[static_cast<std::size_t>(i)].rotationMatrix().col(2)); };
-  for (int i : idxA) {
-    R.setZero();
-    R.template leftCols<3>().setIdentity();
-    const V3 z = zOf(i);
-    for (int k = 0; k < 3; ++k) R.template block<1, 3>(k, 3 + 3 * k) = z.transpose();
-    N += R.transpose() * R;
-    g += R.transpose() * (V3(T[static_cast<std::size_t>(i)].translation()) - ca);
-  }
-  for (int i : idxB) {
-    R.setZero();
-    R.template leftCols<3>().setIdentity();
-    const V3 z = zOf(i);
-    for (int k = 0; k < 3; ++k) R.template block<1, 3>(k, 3 + 3 * k) = z.transpose();
-    R.col(12) = -(V3(T[static_cast<std::size_t>(i)].translation()) - cb);
-    R.template rightCols<3>() = -Eigen::Matrix<Scalar, 3, 3>::Identity();
-    N += R.transpose() * R;
-  }
-  const Scalar nObs = Scalar(idxA.size() + idxB.size());
-  for (int k = 3; k < 12; ++k) N(k, k) += opt.ridge * nObs;
-  const Eigen::LDLT<M16> ldlt(N);
-  if (ldlt.info() != Eigen::Success) return J;
-  const V16 x = ldlt.solve(g);
-  J.s = x(12);
-  if (!x.allFinite() || !(x(12) > Scalar(0))) return J;
-  // B's rows were written for s·(c − c̄_B) + t' = n' + M·z with n' = n − c̄_A: t = t' + c̄_A − s·c̄_B.
-  J.t = V3(x.template tail<3>()) + ca - J.s * cb;
-  // The joint model's quality on all frames in A's units (fitHeadModel's measures).
-  std::vector<SE3<Scalar>> U(T.begin(), T.end());
-  std::vector<int> all = idxA;
-  for (int i : idxB) {
-    U[static_cast<std::size_t>(i)] = SE3<Scalar>(T[static_cast<std::size_t>(i)].rotation(), V3(J.s * V3(T[static_cast<std::size_t>(i)].translation()) + J.t));
-    all.push_back(i);
-  }
-  std::sort(all.begin(), all.end());
-  J.fit = fitHeadModel(U, all, opt);
-  // Motion R² within each segment only (the lag never straddles the reset).
-  const HeadModelFit<Scalar> fa = fitHeadModel(U, idxA, opt), fb = fitHeadModel(U, idxB, opt);
-  J.spreadA = fa.spreadDeg;
-  J.spreadB = fb.spreadDeg;
-  auto motion = [&](const std::vector<int>& idx) {
-    Scalar dres = 0, dvar = 0;
-    for (std::size_t a = 0, b = 0; a < idx.size(); ++a) {
-      while (b < idx.size() && idx[b] < idx[a] + opt.lag) ++b;
-      if (b >= idx.size() || idx[b] != idx[a] + opt.lag) continue;
-      const V3 dc = V3(U[static_cast<std::size_t>(idx[b])].translation()) - V3(U[static_cast<std::size_t>(idx[a])].translation());
-      const V3 dz = zOf(idx[b]) - zOf(idx[a]);
-      dres += (dc - J.fit.M * dz).squaredNorm();
-      dvar += dc.squaredNorm();
-    }
-    return dvar > Scalar(0) ? Scalar(1) - dres / dvar : Scalar(0);
-  };
-  J.fit.motionR2 = std::min(motion(idxA), motion(idxB));
-  J.ok = J.fit.ok && J.fit.r2 >= opt.minR2 && J.fit.motionR2 >= opt.minMotionR2 && J.fit.frontCos >= opt.minFrontCos &&
-         J.fit.radiusSpread <= opt.maxRadiusSpread && J.spreadA >= opt.minSpreadDeg && J.spreadB >= opt.minSpreadDeg;
+  J.ok = all.ok;
+  J.s = all.s[1];
+  J.t = all.t[1];
+  J.fit = all.fit;
+  J.spreadA = all.spreadDeg[0];
+  J.spreadB = all.spreadDeg[1];
   return J;
 }
 
