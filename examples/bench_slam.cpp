@@ -6,17 +6,19 @@
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
-//              [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge]
+//              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //              [--max-ray-jump DEG] [--no-front-check]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
-//                  hand coverage (fraction of the image)
+//                  hand coverage (fraction of the image), estimated camera-to-world quaternion
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
 //   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
 //   --no-reloc       SlamOptions::relocalise off (a loss always re-initialises a new segment)
 //   --no-sequence    SlamOptions::sequenceRefine off (no full-sequence bundle adjustment)
 //   --no-head-model  SlamOptions::headModelFill off (unposed frames held / interpolated)
+//   --no-head-join-all  SlamOptions::headModelJoinAll off (segments joined pairwise only)
+//   --no-head-place-short  SlamOptions::headModelPlaceShort off (a short segment keeps its own positions)
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
@@ -72,7 +74,7 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, revisit = true, thirdView = true,
+  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, headJoinAll = true, headPlaceShort = true, revisit = true, thirdView = true,
        turnBridge = true, frontCheck = true;
   double maxRayJump = -1;  // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
@@ -114,6 +116,10 @@ int main(int argc, char** argv) {
       sequence = false;
     } else if (a == "--no-head-model") {
       headModel = false;
+    } else if (a == "--no-head-join-all") {
+      headJoinAll = false;
+    } else if (a == "--no-head-place-short") {
+      headPlaceShort = false;
     } else if (a == "--no-revisit") {
       revisit = false;
     } else if (a == "--no-third-view") {
@@ -125,7 +131,7 @@ int main(int argc, char** argv) {
     } else if (a == "--no-front-check") {
       frontCheck = false;
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check]\n");
       return 2;
     }
   }
@@ -138,7 +144,10 @@ int main(int argc, char** argv) {
       std::string exe = argv[0];
       const std::size_t sl = exe.rfind('/');
       const std::string dir = sl == std::string::npos ? "." : exe.substr(0, sl);
-      const std::vector<std::string> dirs = {dir + "/../models", "node_modules/@webxr-input-profiles/assets/dist/profiles/generic-hand"};
+      // build/<config>/examples/bench_slam: the build's models, else the npm package from the
+      // repository root or the working folder (the figures depend on which hands are drawn).
+      const std::string npm = "node_modules/@webxr-input-profiles/assets/dist/profiles/generic-hand";
+      const std::vector<std::string> dirs = {dir + "/../models", dir + "/../../../" + npm, npm};
       try {
         right = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Right, dirs), hawor::HandSide::Right).model;
         left = hawor::loadAnyHandModel<double>(hawor::findDefaultHandModel(hawor::HandSide::Left, dirs), hawor::HandSide::Left).model;
@@ -165,6 +174,8 @@ int main(int argc, char** argv) {
       om.relocalise = ou.relocalise = relocalise;
       om.sequenceRefine = ou.sequenceRefine = sequence;
       om.headModelFill = ou.headModelFill = headModel;
+      om.headModelJoinAll = ou.headModelJoinAll = headJoinAll;
+      om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
       om.turnBridge = ou.turnBridge = turnBridge;
@@ -204,10 +215,12 @@ int main(int argc, char** argv) {
         for (const auto& T : r.poses) est.push_back(T.translation());
         if (!dumpPrefix.empty()) {
           std::ofstream d(dumpPrefix + "_" + name + "_" + (m == 0 ? "masked" : "unmasked") + ".csv");
-          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe,coverage\n";
+          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe,coverage,eqx,eqy,eqz,eqw\n";
           for (std::size_t i = 0; i < est.size(); ++i) {
+            const Eigen::Quaterniond q(r.poses[i].rotationMatrix());
             d << i << ',' << gt[i](0) << ',' << gt[i](1) << ',' << gt[i](2) << ',' << est[i](0) << ',' << est[i](1) << ','
-              << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << ',' << coverage[i] << '\n';
+              << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << ',' << coverage[i] << ',' << q.x() << ','
+              << q.y() << ',' << q.z() << ',' << q.w() << '\n';
           }
         }
         RunStats st;

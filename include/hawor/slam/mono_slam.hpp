@@ -210,6 +210,16 @@ struct SlamOptions {
   /// finish(), before the turn-radius join: a segment joined to the one before it by one head
   /// model fitted to both (head_motion.hpp fitHeadJoin: scale and offset), where it explains them.
   bool headModelJoin = true;
+  /// finish(), after the sequence refinement: every segment with headModel.minFrames posed
+  /// frames and its views spread over headModel.minSpreadDeg re-joined at once by one head model
+  /// fitted to all of them (fitHeadJoinAll), where it passes the head tests. The pairwise joins
+  /// above run before the bundle adjustments, on positions too noisy for the motion test; a
+  /// segment left out (too short) keeps its join to the one before.
+  bool headModelJoinAll = true;
+  /// With headModelJoinAll's model accepted: the posed frames of a segment it left out (too few
+  /// frames or views to fix its scale) are placed by the head model like lost frames (status
+  /// Interpolated).
+  bool headModelPlaceShort = true;
   int turnScaleLag = 3;                       ///< frames per window
   Scalar turnScaleMinAngleDeg = Scalar(3);    ///< a window's turn, at least
   int turnScaleMinWindows = 8;
@@ -435,6 +445,7 @@ class MonoSlam {
         focal_.fy = cam_.fy;
       }
     }
+    if (opt_.headModelJoin && opt_.headModelJoinAll && resets_ > 0) joinAllSegmentsByHead();
     if (opt_.headModelFill && everInitialised_) {
       std::vector<SE3T> T(static_cast<std::size_t>(n));
       std::vector<char> posed(static_cast<std::size_t>(n)), rot(static_cast<std::size_t>(n));
@@ -1894,6 +1905,10 @@ class MonoSlam {
     for (MapPoint& p : points_) {
       if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
     }
+    // The sequence refinement's points (after it ran) by their first observation.
+    for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
+      if (!seqPointObs_[j].empty() && seqPointObs_[j].front().first >= f1) seqPoints_[j] = g(V3(seqPoints_[j]));
+    }
   }
 
   /// SlamOptions::refineFocal with the sequence refinement: the focal profile (focal_refine.hpp)
@@ -2027,6 +2042,98 @@ class MonoSlam {
       const V3 J = keyframes_[static_cast<std::size_t>(segFirstKf[i])].T.translation();
       transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(J + k * (x - J)); });
     }
+  }
+
+  /// SlamOptions::headModelJoinAll: the segments (first keyframes segFirstKf; segment i spans
+  /// the frames from its first keyframe to the next one's) with enough posed frames and turn
+  /// joined by one head model (fitHeadJoinAll, the longest segment the reference). True when it
+  /// passed the tests and was applied; a segment left out moves with the one before it.
+  bool joinAllSegmentsByHead() {
+    std::vector<int> segFirstKf;  // first keyframe of each segment, in order
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) segFirstKf.push_back(static_cast<int>(k));
+    }
+    const int n = static_cast<int>(frames_.size());
+    const std::size_t S = segFirstKf.size();
+    if (S < 2) return false;
+    std::vector<SE3T> T(static_cast<std::size_t>(n));
+    std::vector<char> usable(static_cast<std::size_t>(n));
+    for (int f = 0; f < n; ++f) {
+      T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
+      usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+    }
+    std::vector<std::vector<int>> groups;
+    std::vector<int> groupOf(S, -1), first(S + 1, n);
+    std::string line;
+    int ref = -1;
+    for (std::size_t i = 0; i < S; ++i) first[i] = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+    for (std::size_t i = 0; i < S; ++i) {
+      const int a = first[i], b = first[i + 1];
+      std::vector<int> idx;
+      for (int f = a; f < b; ++f) {
+        if (usable[static_cast<std::size_t>(f)]) idx.push_back(f);
+      }
+      const HeadModelFit<Scalar> own = fitHeadModel(T, idx, opt_.headModel);
+      line += " " + std::to_string(a) + "-" + std::to_string(b - 1) + ": " + std::to_string(idx.size()) + " posed, spread " +
+              std::to_string(static_cast<int>(own.spreadDeg)) + " deg;";
+      if (static_cast<int>(idx.size()) < opt_.headModel.minFrames || own.spreadDeg < opt_.headModel.minSpreadDeg) continue;
+      groupOf[i] = static_cast<int>(groups.size());
+      if (ref < 0 || idx.size() > groups[static_cast<std::size_t>(ref)].size()) ref = static_cast<int>(groups.size());
+      groups.push_back(std::move(idx));
+    }
+    if (groups.empty()) {
+      if (opt_.log) opt_.log("segments joined by one head model: no usable segment;" + line);
+      return false;
+    }
+    HeadJoinAll<Scalar> J;
+    if (groups.size() == 1) {
+      // One segment: its own model, judged by the same tests (the others are placed by it).
+      J.s.assign(1, Scalar(1));
+      J.t.assign(1, V3::Zero());
+      J.fit = fitHeadModel(T, groups[0], opt_.headModel);
+      const HeadModelOptions<Scalar>& o = opt_.headModel;
+      J.ok = J.fit.ok && J.fit.r2 >= o.minR2 && J.fit.motionR2 >= o.minMotionR2 && J.fit.frontCos >= o.minFrontCos &&
+             J.fit.radiusSpread <= o.maxRadiusSpread;
+    } else {
+      J = fitHeadJoinAll(T, groups, ref, opt_.headModel);
+    }
+    if (opt_.log) {
+      std::string sc;
+      for (std::size_t k = 0; k < J.s.size(); ++k) sc += (k ? "/" : "") + std::to_string(double(J.s[k]));
+      opt_.log("segments joined by one head model:" + line + " scales " + sc + ", R2 " + std::to_string(double(J.fit.r2)) +
+               ", motion R2 " + std::to_string(double(J.fit.motionR2)) + ", front " + std::to_string(double(J.fit.frontCos)) +
+               ", radius spread " + std::to_string(double(J.fit.radiusSpread)) + (J.ok ? ": joined" : ": not used"));
+    }
+    if (!J.ok) return false;
+    // Segment by segment, in order: transformFrom moves everything from a segment on, so each
+    // joined segment gets its own similarity composed with the inverse of the one applied so far.
+    Scalar a = Scalar(1);
+    V3 b = V3::Zero();
+    for (std::size_t i = 0; i < S; ++i) {
+      if (groupOf[i] < 0) continue;
+      const Scalar s = J.s[static_cast<std::size_t>(groupOf[i])];
+      const V3 t = J.t[static_cast<std::size_t>(groupOf[i])];
+      const int f1 = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+      transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment,
+                    [&](const V3& x) { return V3(s * (x - b) / a + t); });
+      a = s;
+      b = t;
+    }
+    // A segment too short to fix its own scale: its frames are placed by the head model instead
+    // (fillGapsByHeadModel), like lost ones.
+    if (opt_.headModelPlaceShort) {
+      for (std::size_t i = 0; i < S; ++i) {
+        if (groupOf[i] >= 0) continue;
+        for (int f = first[i]; f < first[i + 1]; ++f) {
+          Frame& fr = frames_[static_cast<std::size_t>(f)];
+          if (!fr.posed) continue;
+          fr.posed = false;
+          fr.rotationKnown = true;
+          fr.status = SlamStatus::Interpolated;
+        }
+      }
+    }
+    return true;
   }
 
   /// Frames without a map pose: translation (and rotation where the rays gave none) interpolated
