@@ -323,3 +323,49 @@ TEST_CASE("fitHeadJoinAll<float>", "[slam][head]") {
   REQUIRE(j.ok);
   CHECK(j.s[1] == Approx(2.0f).epsilon(0.03));
 }
+
+TEST_CASE("joinSegmentsByHeadModel: usable segments joined, a short one left out, a walk refused", "[slam][head]") {
+  // Segments [0, 120), [120, 130) (10 frames: too few for its own scale), [130, 240), each in a
+  // map of its own; frames 60-69 unposed (a loss inside the first segment).
+  Rng rng(31);
+  const std::vector<hawor::SE3<double>> truth = standingTurns(rng, 240, Eigen::Vector3d(0.1, 0.3, 1.7), true);
+  const std::vector<int> first = {0, 120, 130, 240};
+  const double sTrue[3] = {1.0, 0.2, 1.8};
+  std::vector<hawor::SE3<double>> T = truth;
+  std::vector<char> posed(240, 1);
+  for (int f = 60; f < 70; ++f) posed[static_cast<std::size_t>(f)] = 0;
+  for (int i = 0; i < 240; ++i) {
+    const int k = i < 120 ? 0 : (i < 130 ? 1 : 2);
+    T[static_cast<std::size_t>(i)] = hawor::SE3<double>(truth[static_cast<std::size_t>(i)].rotation(),
+                                                        hawor::Vec3<double>(Eigen::Vector3d(truth[static_cast<std::size_t>(i)].translation()) / sTrue[k] +
+                                                                            Eigen::Vector3d(0.1 * k, 0.0, -0.2 * k)));
+  }
+  const hawor::SegmentsHeadJoin<double> j = hawor::joinSegmentsByHeadModel(T, posed, first);
+  INFO(j.report);
+  REQUIRE(j.ok);
+  REQUIRE(j.group.size() == 3);
+  CHECK(j.group[0] >= 0);
+  CHECK(j.group[1] == -1);
+  REQUIRE(j.group[2] >= 0);
+  // Segment 2 in segment 0's units (the longest, the reference: its scale is the truth's).
+  const double s2 = j.join.s[static_cast<std::size_t>(j.group[2])] / j.join.s[static_cast<std::size_t>(j.group[0])];
+  CHECK(s2 == Approx(sTrue[2]).epsilon(0.02));
+  // Only the first segment usable (the third cut to 20 frames): its own model, accepted.
+  const std::vector<int> first2 = {0, 120, 130, 150};
+  const std::vector<hawor::SE3<double>> T2(T.begin(), T.begin() + 150);
+  const std::vector<char> posed2(posed.begin(), posed.begin() + 150);
+  const hawor::SegmentsHeadJoin<double> one = hawor::joinSegmentsByHeadModel(T2, posed2, first2);
+  CHECK(one.ok);
+  CHECK(one.group == std::vector<int>({0, -1, -1}));
+  // A walk: no model, nothing joined.
+  std::vector<hawor::SE3<double>> W = T;
+  for (int i = 0; i < 240; ++i) {
+    W[static_cast<std::size_t>(i)] = hawor::SE3<double>(T[static_cast<std::size_t>(i)].rotation(),
+                                                        hawor::Vec3<double>(0.03 * i, 0.4 * std::sin(0.03 * i), 1.6));
+  }
+  CHECK_FALSE(hawor::joinSegmentsByHeadModel(W, posed, first).ok);
+  // Bad input: a clear error.
+  CHECK_THROWS_AS(hawor::joinSegmentsByHeadModel(T, posed, std::vector<int>{0, 120}), hawor::Error);
+  CHECK_THROWS_AS(hawor::joinSegmentsByHeadModel(T, posed, std::vector<int>{0, 130, 120, 240}), hawor::Error);
+  CHECK_THROWS_AS(hawor::joinSegmentsByHeadModel(T, std::vector<char>(3, 1), first), hawor::Error);
+}

@@ -359,4 +359,61 @@ HeadJoin<Scalar> fitHeadJoin(const std::vector<SE3<Scalar>>& T, const std::vecto
   return J;
 }
 
+/// The segments of one sequence joined by one head model (MonoSlam after its resets): per
+/// segment its similarity s·c + t into the reference's units, or none (`group` −1) when it has
+/// fewer than opt.minFrames posed frames or views spread under opt.minSpreadDeg (its own scale is
+/// then undetermined; the caller may place its frames by the model, fillGapsByHeadModel).
+template <typename Scalar>
+struct SegmentsHeadJoin {
+  bool ok = false;           ///< a model passed the head tests (one usable segment: its own model)
+  std::vector<int> group;    ///< per segment: its index in join.s / join.t, −1 left out
+  HeadJoinAll<Scalar> join;  ///< the usable segments' similarities (the longest one the reference)
+  std::string report;        ///< per segment: frames, posed frames, view spread
+};
+
+/// Segment i spans the frames [first[i], first[i + 1]) of T (first has one entry more than the
+/// segments, the last = T.size()); `posed` marks the frames whose positions are measured.
+template <typename Scalar>
+SegmentsHeadJoin<Scalar> joinSegmentsByHeadModel(const std::vector<SE3<Scalar>>& T, const std::vector<char>& posed,
+                                                 const std::vector<int>& first, const HeadModelOptions<Scalar>& opt = {}) {
+  SegmentsHeadJoin<Scalar> R;
+  const std::size_t S = first.empty() ? 0 : first.size() - 1;
+  if (posed.size() != T.size() || S == 0 || first.front() < 0 || first.back() != static_cast<int>(T.size())) {
+    throw Error("joinSegmentsByHeadModel: " + std::to_string(T.size()) + " poses, " + std::to_string(posed.size()) +
+                " posed flags, segment starts not ending at the pose count");
+  }
+  R.group.assign(S, -1);
+  std::vector<std::vector<int>> groups;
+  int ref = -1;
+  for (std::size_t i = 0; i < S; ++i) {
+    if (first[i + 1] < first[i]) throw Error("joinSegmentsByHeadModel: segment starts out of order");
+    std::vector<int> idx;
+    for (int f = first[i]; f < first[i + 1]; ++f) {
+      if (posed[static_cast<std::size_t>(f)]) idx.push_back(f);
+    }
+    const HeadModelFit<Scalar> own = fitHeadModel(T, idx, opt);
+    R.report += " " + std::to_string(first[i]) + "-" + std::to_string(first[i + 1] - 1) + ": " + std::to_string(idx.size()) +
+                " posed, spread " + std::to_string(static_cast<int>(own.spreadDeg)) + " deg;";
+    if (static_cast<int>(idx.size()) < opt.minFrames || own.spreadDeg < opt.minSpreadDeg) continue;
+    R.group[i] = static_cast<int>(groups.size());
+    if (ref < 0 || idx.size() > groups[static_cast<std::size_t>(ref)].size()) ref = static_cast<int>(groups.size());
+    groups.push_back(std::move(idx));
+  }
+  if (groups.empty()) return R;
+  if (groups.size() == 1) {
+    // One usable segment: its own model, judged by the same tests.
+    R.join.s.assign(1, Scalar(1));
+    R.join.t.assign(1, Vec3<Scalar>::Zero());
+    R.join.spreadDeg.assign(1, Scalar(0));
+    R.join.fit = fitHeadModel(T, groups[0], opt);
+    R.join.spreadDeg[0] = R.join.fit.spreadDeg;
+    R.join.ok = R.join.fit.ok && R.join.fit.r2 >= opt.minR2 && R.join.fit.motionR2 >= opt.minMotionR2 &&
+                R.join.fit.frontCos >= opt.minFrontCos && R.join.fit.radiusSpread <= opt.maxRadiusSpread;
+  } else {
+    R.join = fitHeadJoinAll(T, groups, ref, opt);
+  }
+  R.ok = R.join.ok;
+  return R;
+}
+
 }  // namespace hawor

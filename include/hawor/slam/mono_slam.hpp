@@ -2064,49 +2064,19 @@ class MonoSlam {
       T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
       usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
     }
-    std::vector<std::vector<int>> groups;
-    std::vector<int> groupOf(S, -1), first(S + 1, n);
-    std::string line;
-    int ref = -1;
+    std::vector<int> first(S + 1, n);
     for (std::size_t i = 0; i < S; ++i) first[i] = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
-    for (std::size_t i = 0; i < S; ++i) {
-      const int a = first[i], b = first[i + 1];
-      std::vector<int> idx;
-      for (int f = a; f < b; ++f) {
-        if (usable[static_cast<std::size_t>(f)]) idx.push_back(f);
-      }
-      const HeadModelFit<Scalar> own = fitHeadModel(T, idx, opt_.headModel);
-      line += " " + std::to_string(a) + "-" + std::to_string(b - 1) + ": " + std::to_string(idx.size()) + " posed, spread " +
-              std::to_string(static_cast<int>(own.spreadDeg)) + " deg;";
-      if (static_cast<int>(idx.size()) < opt_.headModel.minFrames || own.spreadDeg < opt_.headModel.minSpreadDeg) continue;
-      groupOf[i] = static_cast<int>(groups.size());
-      if (ref < 0 || idx.size() > groups[static_cast<std::size_t>(ref)].size()) ref = static_cast<int>(groups.size());
-      groups.push_back(std::move(idx));
-    }
-    if (groups.empty()) {
-      if (opt_.log) opt_.log("segments joined by one head model: no usable segment;" + line);
-      return false;
-    }
-    HeadJoinAll<Scalar> J;
-    if (groups.size() == 1) {
-      // One segment: its own model, judged by the same tests (the others are placed by it).
-      J.s.assign(1, Scalar(1));
-      J.t.assign(1, V3::Zero());
-      J.fit = fitHeadModel(T, groups[0], opt_.headModel);
-      const HeadModelOptions<Scalar>& o = opt_.headModel;
-      J.ok = J.fit.ok && J.fit.r2 >= o.minR2 && J.fit.motionR2 >= o.minMotionR2 && J.fit.frontCos >= o.minFrontCos &&
-             J.fit.radiusSpread <= o.maxRadiusSpread;
-    } else {
-      J = fitHeadJoinAll(T, groups, ref, opt_.headModel);
-    }
+    const SegmentsHeadJoin<Scalar> R = joinSegmentsByHeadModel(T, usable, first, opt_.headModel);
+    const HeadJoinAll<Scalar>& J = R.join;
     if (opt_.log) {
       std::string sc;
       for (std::size_t k = 0; k < J.s.size(); ++k) sc += (k ? "/" : "") + std::to_string(double(J.s[k]));
-      opt_.log("segments joined by one head model:" + line + " scales " + sc + ", R2 " + std::to_string(double(J.fit.r2)) +
+      opt_.log("segments joined by one head model:" + R.report + " scales " + sc + ", R2 " + std::to_string(double(J.fit.r2)) +
                ", motion R2 " + std::to_string(double(J.fit.motionR2)) + ", front " + std::to_string(double(J.fit.frontCos)) +
-               ", radius spread " + std::to_string(double(J.fit.radiusSpread)) + (J.ok ? ": joined" : ": not used"));
+               ", radius spread " + std::to_string(double(J.fit.radiusSpread)) + (R.ok ? ": joined" : ": not used"));
     }
-    if (!J.ok) return false;
+    if (!R.ok) return false;
+    const std::vector<int>& groupOf = R.group;
     // Segment by segment, in order: transformFrom moves everything from a segment on, so each
     // joined segment gets its own similarity composed with the inverse of the one applied so far.
     Scalar a = Scalar(1);
@@ -2115,8 +2085,7 @@ class MonoSlam {
       if (groupOf[i] < 0) continue;
       const Scalar s = J.s[static_cast<std::size_t>(groupOf[i])];
       const V3 t = J.t[static_cast<std::size_t>(groupOf[i])];
-      const int f1 = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
-      transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment,
+      transformFrom(first[i], keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment,
                     [&](const V3& x) { return V3(s * (x - b) / a + t); });
       a = s;
       b = t;
