@@ -77,6 +77,14 @@ struct HeadModelFit {
   }
 };
 
+/// The head tests of the file comment on a fit (view spread apart: a joint fit checks it per
+/// segment): solved, R² ≥ minR2, motion R² ≥ minMotionR2, the eye in front, a steady radius.
+template <typename Scalar>
+bool passesHeadTests(const HeadModelFit<Scalar>& fit, const HeadModelOptions<Scalar>& opt) {
+  return fit.ok && fit.r2 >= opt.minR2 && fit.motionR2 >= opt.minMotionR2 && fit.frontCos >= opt.minFrontCos &&
+         fit.radiusSpread <= opt.maxRadiusSpread;
+}
+
 /// Least-squares fit of c = n + M·z to the poses `T` at the indices `idx` (file comment).
 template <typename Scalar>
 HeadModelFit<Scalar> fitHeadModel(const std::vector<SE3<Scalar>>& T, const std::vector<int>& idx,
@@ -195,8 +203,7 @@ int fillGapsByHeadModel(std::vector<SE3<Scalar>>& T, const std::vector<char>& po
                  std::to_string(double(fit.spreadDeg)) + " deg, front " + std::to_string(double(fit.frontCos)) +
                  ", radius spread " + std::to_string(double(fit.radiusSpread)) + ";";
     }
-    if (fit.ok && fit.r2 >= opt.minR2 && fit.motionR2 >= opt.minMotionR2 && fit.spreadDeg >= opt.minSpreadDeg &&
-        fit.frontCos >= opt.minFrontCos && fit.radiusSpread <= opt.maxRadiusSpread) {
+    if (passesHeadTests(fit, opt) && fit.spreadDeg >= opt.minSpreadDeg) {
       const int left = a - 1, right = b < n ? b : -1;
       const V3 eL = left >= 0 ? V3(T[static_cast<std::size_t>(left)].translation() - fit.predict(T[static_cast<std::size_t>(left)])) : V3::Zero();
       const V3 eR = right >= 0 ? V3(T[static_cast<std::size_t>(right)].translation() - fit.predict(T[static_cast<std::size_t>(right)])) : V3::Zero();
@@ -330,8 +337,7 @@ HeadJoinAll<Scalar> fitHeadJoinAll(const std::vector<SE3<Scalar>>& T, const std:
     motion = std::min(motion, dvar > Scalar(0) ? Scalar(1) - dres / dvar : Scalar(0));
   }
   J.fit.motionR2 = motion;
-  J.ok = J.fit.ok && J.fit.r2 >= opt.minR2 && J.fit.motionR2 >= opt.minMotionR2 && J.fit.frontCos >= opt.minFrontCos &&
-         J.fit.radiusSpread <= opt.maxRadiusSpread && spread >= opt.minSpreadDeg;
+  J.ok = passesHeadTests(J.fit, opt) && spread >= opt.minSpreadDeg;
   return J;
 }
 
@@ -407,8 +413,7 @@ SegmentsHeadJoin<Scalar> joinSegmentsByHeadModel(const std::vector<SE3<Scalar>>&
     R.join.spreadDeg.assign(1, Scalar(0));
     R.join.fit = fitHeadModel(T, groups[0], opt);
     R.join.spreadDeg[0] = R.join.fit.spreadDeg;
-    R.join.ok = R.join.fit.ok && R.join.fit.r2 >= opt.minR2 && R.join.fit.motionR2 >= opt.minMotionR2 &&
-                R.join.fit.frontCos >= opt.minFrontCos && R.join.fit.radiusSpread <= opt.maxRadiusSpread;
+    R.join.ok = passesHeadTests(R.join.fit, opt);
   } else {
     R.join = fitHeadJoinAll(T, groups, ref, opt);
   }

@@ -1979,14 +1979,20 @@ class MonoSlam {
     return true;
   }
 
+  /// The first keyframe of each map segment, in order.
+  std::vector<int> segmentFirstKeyframes() const {
+    std::vector<int> first;
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) first.push_back(static_cast<int>(k));
+    }
+    return first;
+  }
+
   /// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
   /// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
   /// its scale); frames before its first keyframe (lost, not posed) are filled in later.
   void joinSegmentsByTurns() {
-    std::vector<int> segFirstKf;  // first keyframe of each segment, in order
-    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-      if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) segFirstKf.push_back(static_cast<int>(k));
-    }
+    const std::vector<int> segFirstKf = segmentFirstKeyframes();
     if (segFirstKf.size() < 2) return;
     const int n = static_cast<int>(frames_.size());
     std::vector<SE3T> T(static_cast<std::size_t>(n));
@@ -2051,10 +2057,7 @@ class MonoSlam {
   /// joined by one head model (fitHeadJoinAll, the longest segment the reference). True when it
   /// passed the tests and was applied; a segment left out moves with the one before it.
   bool joinAllSegmentsByHead() {
-    std::vector<int> segFirstKf;  // first keyframe of each segment, in order
-    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-      if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) segFirstKf.push_back(static_cast<int>(k));
-    }
+    const std::vector<int> segFirstKf = segmentFirstKeyframes();
     const int n = static_cast<int>(frames_.size());
     const std::size_t S = segFirstKf.size();
     if (S < 2) return false;
