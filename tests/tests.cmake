@@ -2,7 +2,8 @@
 #   test_<module>      unit/property tests, native and WASM (files not starting with ref_)
 #   test_<module>_ref  cross-checks against numpy/scipy scripts run at test time (ref_*.cpp), native
 # Python-driven end-to-end checks of the CLI: tests/cli/test_*.py, each gets the hawor binary.
-foreach(module geometry motion eval io hand render synth slam scale)
+# Longest compiles first (slam, hand), so that on two cores they do not end the build alone.
+foreach(module slam hand geometry motion eval io render synth scale)
   file(GLOB _all CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/${module}/*.cpp")
   set(_unit "")
   set(_ref "")
@@ -31,11 +32,20 @@ foreach(module geometry motion eval io hand render synth slam scale)
   if(HAWOR_SANITIZE AND module STREQUAL "hand")
     list(FILTER _unit INCLUDE REGEX "(pickle|gltf|mano_loader|model_io)[^/]*\\.cpp$")
   endif()
+  # Modules whose tests run in seconds unoptimised (natively and under node) build at -O0.
+  set(_unit_opt "")
+  set(_ref_opt "")
+  if(module MATCHES "^(geometry|eval|io)$")
+    set(_unit_opt UNOPTIMISED)
+    set(_ref_opt UNOPTIMISED)
+  elseif(module STREQUAL "hand")
+    set(_ref_opt UNOPTIMISED)
+  endif()
   if(_unit)
-    hawor_add_test(test_${module} SOURCES ${_unit} ${_parser} LABELS ${module})
+    hawor_add_test(test_${module} SOURCES ${_unit} ${_parser} ${_unit_opt} LABELS ${module})
   endif()
   if(_ref)
-    hawor_add_test(test_${module}_ref SOURCES ${_ref} NATIVE_ONLY LABELS ${module} ref)
+    hawor_add_test(test_${module}_ref SOURCES ${_ref} NATIVE_ONLY ${_ref_opt} LABELS ${module} ref)
   endif()
 endforeach()
 
