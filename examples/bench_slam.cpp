@@ -22,6 +22,8 @@
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
+//   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
+//   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
 #include <sys/resource.h>
@@ -77,6 +79,8 @@ int main(int argc, char** argv) {
   bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, headJoinAll = true, headPlaceShort = true, revisit = true, thirdView = true,
        turnBridge = true, frontCheck = true;
   double maxRayJump = -1;  // < 0: the library's default
+  int relocAnchors = -1;   // < 0: the library's default
+  int seqIterations = -1;  // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -130,8 +134,12 @@ int main(int argc, char** argv) {
       maxRayJump = std::stod(next());
     } else if (a == "--no-front-check") {
       frontCheck = false;
+    } else if (a == "--seq-iterations") {
+      seqIterations = std::stoi(next());
+    } else if (a == "--reloc-anchors") {
+      relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N]\n");
       return 2;
     }
   }
@@ -181,6 +189,8 @@ int main(int argc, char** argv) {
       om.turnBridge = ou.turnBridge = turnBridge;
       if (maxRayJump >= 0) om.maxRayJumpDeg = ou.maxRayJumpDeg = maxRayJump;
       if (!frontCheck) om.twoView.minInFrontRatio = ou.twoView.minInFrontRatio = 0;
+      if (relocAnchors >= 0) om.relocAnchors = ou.relocAnchors = relocAnchors;
+      if (seqIterations > 0) om.sequence.iterations = ou.sequence.iterations = seqIterations;
       if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;

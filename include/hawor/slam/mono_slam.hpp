@@ -86,8 +86,8 @@
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
-// refindKeyframes keyframes and, for relocalisation, of relocKeyframes keyframes (about 1.6 MB each
-// at 640×480); no other images. finish() holds every frame's observations grouped by track once
+// refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to relocAnchors
+// anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() holds every frame's observations grouped by track once
 // more (≈ 24 bytes an observation) and the adjustment of at most sequence.maxAdjustedFrames
 // frames.
 // Not thread-safe; one instance per video.
@@ -246,6 +246,14 @@ struct SlamOptions {
   Scalar revisitMaxRotationDeg = Scalar(2); ///< PnP on the found points vs the tracked pose
   int relocKeyframes = 10;
   int relocSpacing = 15;
+  // Besides those (the most recent), up to relocAnchors ANCHOR keyframes of the segment are kept:
+  // a keyframe becomes one when no anchor looks within relocAnchorDeg of its direction from within
+  // relocAnchorDepths median scene depths of its position. A head that stays in place (looking
+  // around, fast turns, working at a table) keeps a view of every direction it mapped, however
+  // long ago, for relocalisation and for the revisit search; walking, the oldest anchor goes.
+  int relocAnchors = 8;
+  Scalar relocAnchorDeg = Scalar(20);
+  Scalar relocAnchorDepths = Scalar(0.3);
   int relocMaxPoints = 300;
   Scalar relocMaxShiftPx = Scalar(40);
   int relocMinInliers = 30;
@@ -586,6 +594,7 @@ class MonoSlam {
   struct KeyframePyramid {
     int kf = -1;
     ImagePyramid pyr;
+    bool anchor = false;  ///< relocPyr_: an anchor (SlamOptions::relocAnchors), not a recent one
   };
   struct Frame {
     SE3T T;
@@ -1061,6 +1070,40 @@ class MonoSlam {
     store.back().pyr = curPyr_;
   }
 
+  /// relocPyr_ (kept sorted by keyframe): keyframe k joins as an anchor when no anchor of the
+  /// segment looks within relocAnchorDeg of its direction from within relocAnchorDepths median
+  /// scene depths, else as a recent one; each kind drops its oldest beyond its capacity.
+  void keepRelocPyramid(int k) {
+    const Keyframe& kk = keyframes_[static_cast<std::size_t>(k)];
+    const V3 z = kk.T.rotationMatrix().col(2);
+    const Scalar cosMax = std::cos(opt_.relocAnchorDeg * Constants<Scalar>::pi() / Scalar(180));
+    const Scalar maxDist = opt_.relocAnchorDepths * lastMedianDepth_;
+    bool anchor = opt_.relocAnchors > 0 && lastMedianDepth_ > Scalar(0);
+    for (const KeyframePyramid& e : relocPyr_) {
+      if (!anchor) break;
+      const Keyframe& ka = keyframes_[static_cast<std::size_t>(e.kf)];
+      anchor = !(e.anchor && ka.segment == kk.segment && V3(ka.T.rotationMatrix().col(2)).dot(z) >= cosMax &&
+                 (ka.T.translation() - kk.T.translation()).norm() <= maxDist);
+    }
+    int count = 0;
+    for (const KeyframePyramid& e : relocPyr_) count += e.anchor == anchor ? 1 : 0;
+    const int capacity = anchor ? opt_.relocAnchors : opt_.relocKeyframes;
+    if (count >= capacity) {
+      for (std::size_t i = 0; i < relocPyr_.size(); ++i) {
+        if (relocPyr_[i].anchor != anchor) continue;
+        KeyframePyramid old = std::move(relocPyr_[i]);  // reuse its buffers
+        relocPyr_.erase(relocPyr_.begin() + static_cast<std::ptrdiff_t>(i));
+        relocPyr_.push_back(std::move(old));
+        break;
+      }
+    } else {
+      relocPyr_.emplace_back();
+    }
+    relocPyr_.back().kf = k;
+    relocPyr_.back().pyr = curPyr_;
+    relocPyr_.back().anchor = anchor;
+  }
+
   /// After a keyframe's points are in: sliding-window bundle adjustment, the frame takes the
   /// adjusted pose, new corners fill the grid (their first keyframe observation is this one).
   void closeKeyframe(Frame& fr) {
@@ -1073,7 +1116,7 @@ class MonoSlam {
     if (opt_.relocalise && opt_.relocKeyframes > 0 && current &&
         (relocPyr_.empty() ||
          keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.relocSpacing)) {
-      keepPyramid(relocPyr_, opt_.relocKeyframes, k);
+      keepRelocPyramid(k);
     }
     lastKfInliers_ = countMapped();
     framesSinceKf_ = 0;
