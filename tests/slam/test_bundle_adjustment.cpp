@@ -306,17 +306,20 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
     ref.solve(rp, rx, 300);
     const double costRef = ref.cost(ref.residuals(rp, rx));
 
-    for (BALinearSolver solver : {BALinearSolver::Dense, BALinearSolver::Sparse}) {
+    for (BALinearSolver solver : {BALinearSolver::Dense, BALinearSolver::Sparse, BALinearSolver::Iterative}) {
       BAProblem<double> Q = P;
       BAOptions<double> opt = tightOptions(c.loss, c.sigma, c.k);
       opt.maxIterations = 1000;  // IRLS converges linearly in the last digits
       opt.minRadialCurvature = c.minRadialCurvature;
       opt.solver = solver;
+      opt.cgTolerance = 1e-12;
       const BAReport<double> rep = bundleAdjust(Q, opt);
-      INFO(c.name << (solver == BALinearSolver::Dense ? " dense" : " sparse") << ": cost " << rep.initialCost
+      INFO(c.name << (solver == BALinearSolver::Dense ? " dense" : (solver == BALinearSolver::Sparse ? " sparse" : " iterative"))
+                  << ": cost " << rep.initialCost
                   << " -> " << rep.finalCost << " (reference " << costRef << "), iterations "
                   << rep.iterations << ", termination " << int(rep.termination));
       CHECK(rep.sparseSolver == (solver == BALinearSolver::Sparse));
+      CHECK(rep.iterativeSolver == (solver == BALinearSolver::Iterative));
       CHECK(std::abs(rep.initialCost - cost0) <= 1e-10 * cost0);  // same cost definition
       CHECK(rep.converged);
       CHECK(rep.finalCost < rep.initialCost);
@@ -474,6 +477,7 @@ TEST_CASE("bundleAdjust: motion-only, no variables, points behind, sparse = dens
     s.problem.poses[0] = s.poses[0];  // the fixed poses define the gauge: at the truth
     s.problem.poses[1] = s.poses[1];
     BAProblem<double> dense = s.problem;
+    const BAProblem<double> s0 = s.problem;
     BAOptions<double> opt;
     opt.maxIterations = 40;
     const auto rs = bundleAdjust(s.problem, opt);
@@ -485,6 +489,19 @@ TEST_CASE("bundleAdjust: motion-only, no variables, points behind, sparse = dens
     CHECK(rs.finalRmsPx < 0.75);  // 0.5 px noise per coordinate: E‖r‖ ≈ 0.5·√2 less the dof
     CHECK(std::abs(rs.finalCost - rd.finalCost) <= 1e-6 * rd.finalCost);
     CHECK(maxPoseDiff(s.problem.poses, dense.poses) < 1e-6);
+    // With the thresholds lowered Auto picks conjugate gradients (block-Jacobi preconditioned),
+    // and it reaches the same optimum.
+    BAProblem<double> cg = s0;
+    BAOptions<double> oc;
+    oc.maxIterations = 40;
+    oc.iterativeMinPoses = 50;
+    oc.iterativeMinBlocksPerPose = 3;
+    const auto ri = bundleAdjust(cg, oc);
+    CHECK(ri.iterativeSolver);
+    CHECK_FALSE(ri.sparseSolver);
+    CHECK(ri.converged);
+    CHECK(std::abs(ri.finalCost - rd.finalCost) <= 1e-6 * rd.finalCost);
+    CHECK(maxPoseDiff(cg.poses, dense.poses) < 1e-5);
   }
 }
 

@@ -30,7 +30,14 @@
 //   δ_p = H_pp⁻¹(−g_p − H_pc δ_c), point blocks 3×3, camera blocks 6×6.
 //   S is solved densely (LLT) for up to `denseMaxPoses` free poses (sliding windows) and by a
 //   sparse Cholesky (Eigen's SimplicialLLT, AMD ordering) on the block pattern of co-observing
-//   cameras beyond that (global BA over hundreds of keyframes).
+//   cameras beyond that (global BA over hundreds of keyframes). A long sequence whose old parts
+//   are seen again (a head that keeps looking back at the same places) couples most cameras with
+//   most others, and the Cholesky factor fills in to a dense one (3,000 frames, 461 keyframes,
+//   59 blocks a camera: ~100 MB and 20 s): from `iterativeMinPoses` free poses with at least
+//   `iterativeMinBlocksPerPose` blocks of S a pose, S is solved by conjugate gradients
+//   preconditioned by the inverses of its 6×6 diagonal blocks (block Jacobi; the "iterative
+//   Schur" of Agarwal et al. 2010), using only the blocks S already holds, to a relative residual
+//   of cgTolerance within cgMaxIterations (an inexact step that LM accepts or damps like any).
 // Gauge: a monocular problem has 7 gauge freedoms (pose and scale). Fix at least one pose
 //   (poseFixed); fix the scale with a second fixed pose or a BAScalePrior between two cameras.
 //   Without them the free directions are held only by the damping (no error, slow convergence).
@@ -108,7 +115,7 @@ int addFarthestScalePrior(BAProblem<Scalar>& P, int anchor, Scalar w = Scalar(1e
   return farV;
 }
 
-enum class BALinearSolver { Auto, Dense, Sparse };
+enum class BALinearSolver { Auto, Dense, Sparse, Iterative };
 
 enum class BATermination {
   FunctionTolerance,   ///< relative cost decrease of an accepted step ≤ functionTolerance
@@ -133,6 +140,10 @@ struct BAOptions {
   Scalar gradientTolerance = Scalar(1e-10);
   BALinearSolver solver = BALinearSolver::Auto;
   int denseMaxPoses = 60;               ///< Auto: dense reduced system up to this many free poses
+  int iterativeMinPoses = 300;          ///< Auto: conjugate gradients from this many free poses…
+  int iterativeMinBlocksPerPose = 30;   ///< …with at least this many blocks of S a pose
+  Scalar cgTolerance = Scalar(1e-8);    ///< ‖S·δ − b‖ ≤ cgTolerance·‖b‖
+  int cgMaxIterations = 500;
   /// Floor D_min of the radial curvature factor of the robust correction (file comment), in (0, 1].
   /// 1 (default) is plain IRLS, the fastest from a poor start or with many outliers (measured:
   /// 6 vs 40 iterations with 20 % outliers and Cauchy); ~0.1 converges faster in the last digits
@@ -151,7 +162,8 @@ struct BAReport {
   int usedObservations = 0;    ///< weight > 0 and in front of the camera at the start
   int behindObservations = 0;  ///< weight > 0 but at depth ≤ minDepth at the start (excluded)
   int freePoses = 0, freePoints = 0;
-  bool sparseSolver = false;   ///< the reduced camera system was solved sparsely
+  bool sparseSolver = false;   ///< the reduced camera system was solved sparsely (Cholesky)
+  bool iterativeSolver = false;  ///< the reduced camera system was solved by conjugate gradients
   Scalar lambda = Scalar(0);   ///< final LM damping
 };
 
@@ -328,6 +340,9 @@ void validate(const BAProblem<Scalar>& P, const BAOptions<Scalar>& opt) {
   }
   if (!(opt.minRadialCurvature > Scalar(0) && opt.minRadialCurvature <= Scalar(1))) {
     throw Error("bundleAdjust: minRadialCurvature must be in (0, 1]");
+  }
+  if (!(opt.cgTolerance > Scalar(0)) || opt.cgMaxIterations < 1) {
+    throw Error("bundleAdjust: cgTolerance must be > 0 and cgMaxIterations >= 1");
   }
 }
 
@@ -574,9 +589,13 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
   }
   std::vector<int> diagBlock(static_cast<std::size_t>(nVC));
   for (int c = 0; c < nVC; ++c) diagBlock[static_cast<std::size_t>(c)] = blockOf(c, c);
-  const bool sparse = opt.solver == BALinearSolver::Sparse ||
-                      (opt.solver == BALinearSolver::Auto && nVC > opt.denseMaxPoses);
+  const bool iterative = opt.solver == BALinearSolver::Iterative ||
+                         (opt.solver == BALinearSolver::Auto && nVC >= opt.iterativeMinPoses &&
+                          keys.size() >= static_cast<std::size_t>(opt.iterativeMinBlocksPerPose) * static_cast<std::size_t>(nVC));
+  const bool sparse = !iterative && (opt.solver == BALinearSolver::Sparse ||
+                                     (opt.solver == BALinearSolver::Auto && nVC > opt.denseMaxPoses));
   rep.sparseSolver = sparse && nVC > 0;
+  rep.iterativeSolver = iterative && nVC > 0;
 
   // --- linearisation storage ---------------------------------------------------------------------
   std::vector<SM6> Hcc(static_cast<std::size_t>(nVC));
@@ -666,6 +685,53 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
   Eigen::SimplicialLLT<Eigen::SparseMatrix<Scalar>, Eigen::Lower, Eigen::AMDOrdering<int>> sparseLLT;
   bool patternAnalysed = false;
   std::vector<Eigen::Triplet<Scalar>> triplets;
+  std::vector<SM6> blockInv;                // conjugate gradients: inverses of S's diagonal blocks
+  VecX<Scalar> cgR, cgZ, cgP, cgQ;
+  // y = S·x from the stored blocks (S[b] is block (ci, cj), ci ≤ cj; S symmetric).
+  auto multiplyS = [&](const VecX<Scalar>& x, VecX<Scalar>& y) {
+    y.setZero(6 * nVC);
+    for (std::size_t b = 0; b < keys.size(); ++b) {
+      const int ci = static_cast<int>(keys[b] >> 32), cj = static_cast<int>(keys[b] & 0xFFFFFFFFu);
+      y.template segment<6>(6 * ci).noalias() += S[b] * x.template segment<6>(6 * cj);
+      if (ci != cj) y.template segment<6>(6 * cj).noalias() += S[b].transpose() * x.template segment<6>(6 * ci);
+    }
+  };
+  // Preconditioned conjugate gradients on S·dc = rhs from dc = 0; false when S shows itself not
+  // positive definite (a diagonal block, or pᵀSp ≤ 0).
+  auto solveCG = [&]() -> bool {
+    blockInv.resize(static_cast<std::size_t>(nVC));
+    for (int c = 0; c < nVC; ++c) {
+      const M6 D = S[static_cast<std::size_t>(diagBlock[static_cast<std::size_t>(c)])];
+      const Eigen::LLT<M6> l(D);
+      if (l.info() != Eigen::Success) return false;
+      blockInv[static_cast<std::size_t>(c)] = l.solve(M6::Identity());
+    }
+    auto precondition = [&](const VecX<Scalar>& r, VecX<Scalar>& z) {
+      z.resize(6 * nVC);
+      for (int c = 0; c < nVC; ++c) z.template segment<6>(6 * c).noalias() = blockInv[static_cast<std::size_t>(c)] * r.template segment<6>(6 * c);
+    };
+    dc.setZero(6 * nVC);
+    cgR = rhs;
+    const Scalar bNorm = rhs.norm();
+    if (!(bNorm > Scalar(0))) return std::isfinite(double(bNorm));
+    precondition(cgR, cgZ);
+    cgP = cgZ;
+    Scalar rz = cgR.dot(cgZ);
+    for (int it = 0; it < opt.cgMaxIterations; ++it) {
+      multiplyS(cgP, cgQ);
+      const Scalar pq = cgP.dot(cgQ);
+      if (!(pq > Scalar(0))) return false;
+      const Scalar alpha = rz / pq;
+      dc.noalias() += alpha * cgP;
+      cgR.noalias() -= alpha * cgQ;
+      if (cgR.norm() <= opt.cgTolerance * bNorm) break;
+      precondition(cgR, cgZ);
+      const Scalar rzNew = cgR.dot(cgZ);
+      cgP = cgZ + (rzNew / rz) * cgP;
+      rz = rzNew;
+    }
+    return true;
+  };
 
   // Solves the damped system; returns false when a factorisation fails. Also returns the
   // predicted decrease −gᵀδ + λ·δᵀDδ of the model F + 2gᵀδ + δᵀHδ.
@@ -723,7 +789,9 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
     }
     // Solve S·δc = rhs.
     if (nVC > 0) {
-      if (!sparse) {
+      if (iterative) {
+        if (!solveCG()) return false;
+      } else if (!sparse) {
         Sd.setZero(6 * nVC, 6 * nVC);
         for (std::size_t b = 0; b < keys.size(); ++b) {
           const int ci = static_cast<int>(keys[b] >> 32), cj = static_cast<int>(keys[b] & 0xFFFFFFFFu);
