@@ -86,10 +86,11 @@
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
-// refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to relocAnchors
-// anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() holds every frame's observations grouped by track once
-// more (≈ 24 bytes an observation) and the adjustment of at most sequence.maxAdjustedFrames
-// frames.
+// refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to
+// relocAnchors anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() holds
+// every frame's observations twice more (≈ 24 bytes an observation as the sequence refinement's
+// input, 12 grouped by track inside it) and the adjustment of at most
+// sequence.maxAdjustedFrames frames.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -1056,23 +1057,29 @@ class MonoSlam {
     return true;
   }
 
-  /// Appends the current pyramid as keyframe k's to `store`, at most `capacity` entries (the
-  /// oldest entry's buffers reused).
-  void keepPyramid(std::vector<KeyframePyramid>& store, int capacity, int k) {
-    if (static_cast<int>(store.size()) >= capacity) {
-      KeyframePyramid old = std::move(store.front());
-      store.erase(store.begin());
+  /// Appends the current pyramid as keyframe k's to `store`, at most `capacity` entries of its
+  /// kind (`anchor`) there (the oldest entry of that kind goes, its buffers reused); the store
+  /// stays sorted by keyframe.
+  void keepPyramid(std::vector<KeyframePyramid>& store, int capacity, int k, bool anchor = false) {
+    int count = 0;
+    for (const KeyframePyramid& e : store) count += e.anchor == anchor ? 1 : 0;
+    bool reused = false;
+    for (std::size_t i = 0; i < store.size() && count >= capacity && !reused; ++i) {
+      if (store[i].anchor != anchor) continue;
+      KeyframePyramid old = std::move(store[i]);
+      store.erase(store.begin() + static_cast<std::ptrdiff_t>(i));
       store.push_back(std::move(old));
-    } else {
-      store.emplace_back();
+      reused = true;
     }
+    if (!reused) store.emplace_back();
     store.back().kf = k;
     store.back().pyr = curPyr_;
+    store.back().anchor = anchor;
   }
 
-  /// relocPyr_ (kept sorted by keyframe): keyframe k joins as an anchor when no anchor of the
-  /// segment looks within relocAnchorDeg of its direction from within relocAnchorDepths median
-  /// scene depths, else as a recent one; each kind drops its oldest beyond its capacity.
+  /// relocPyr_: keyframe k joins as an anchor when no anchor of the segment looks within
+  /// relocAnchorDeg of its direction from within relocAnchorDepths median scene depths, else as
+  /// a recent one; each kind drops its oldest beyond its capacity (keepPyramid).
   void keepRelocPyramid(int k) {
     const Keyframe& kk = keyframes_[static_cast<std::size_t>(k)];
     const V3 z = kk.T.rotationMatrix().col(2);
@@ -1085,23 +1092,7 @@ class MonoSlam {
       anchor = !(e.anchor && ka.segment == kk.segment && V3(ka.T.rotationMatrix().col(2)).dot(z) >= cosMax &&
                  (ka.T.translation() - kk.T.translation()).norm() <= maxDist);
     }
-    int count = 0;
-    for (const KeyframePyramid& e : relocPyr_) count += e.anchor == anchor ? 1 : 0;
-    const int capacity = anchor ? opt_.relocAnchors : opt_.relocKeyframes;
-    if (count >= capacity) {
-      for (std::size_t i = 0; i < relocPyr_.size(); ++i) {
-        if (relocPyr_[i].anchor != anchor) continue;
-        KeyframePyramid old = std::move(relocPyr_[i]);  // reuse its buffers
-        relocPyr_.erase(relocPyr_.begin() + static_cast<std::ptrdiff_t>(i));
-        relocPyr_.push_back(std::move(old));
-        break;
-      }
-    } else {
-      relocPyr_.emplace_back();
-    }
-    relocPyr_.back().kf = k;
-    relocPyr_.back().pyr = curPyr_;
-    relocPyr_.back().anchor = anchor;
+    keepPyramid(relocPyr_, anchor ? opt_.relocAnchors : opt_.relocKeyframes, k, anchor);
   }
 
   /// After a keyframe's points are in: sliding-window bundle adjustment, the frame takes the
