@@ -87,10 +87,10 @@
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
 // refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to
-// relocAnchors anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() holds
-// every frame's observations twice more (≈ 24 bytes an observation as the sequence refinement's
-// input, 12 grouped by track inside it) and the adjustment of at most
-// sequence.maxAdjustedFrames frames.
+// relocAnchors anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() first
+// lets every image go, then holds every frame's observations twice more (≈ 24 bytes an
+// observation as the sequence refinement's input, 12 grouped by track inside it) and the
+// adjustment of at most sequence.maxAdjustedFrames frames.
 // Not thread-safe; one instance per video.
 #pragma once
 
@@ -419,6 +419,15 @@ class MonoSlam {
   SlamResult<Scalar> finish() {
     if (finished_) throw Error("MonoSlam: finish() called twice");
     finished_ = true;
+    // No frame comes after finish(): the images kept for tracking, re-finding and relocalisation
+    // (up to 20 pyramids, about 30 MB at 640×480) go before the sequence refinement needs its
+    // memory.
+    prevPyr_ = ImagePyramid();
+    curPyr_ = ImagePyramid();
+    std::vector<KeyframePyramid>().swap(kfPyr_);
+    std::vector<KeyframePyramid>().swap(relocPyr_);
+    curMask_ = ImageU8();
+    std::vector<unsigned char>().swap(maskTmp_);
     SlamResult<Scalar> res;
     const int n = static_cast<int>(frames_.size());
     if (n == 0) return res;
@@ -1891,7 +1900,7 @@ class MonoSlam {
         o[i].uv = V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1)));
       }
     }
-    const SequenceRefineResult<Scalar> r = refineSequence(cam_, poses, usable, obs, opt_.sequence);
+    SequenceRefineResult<Scalar> r = refineSequence(cam_, poses, usable, obs, opt_.sequence);
     if (opt_.log) {
       int adj = 0;
       for (char a : r.adjusted) adj += a;
@@ -1921,8 +1930,8 @@ class MonoSlam {
       }
     }
     fillUnposed();
-    seqPoints_ = r.points;
-    seqPointObs_ = r.pointObs;
+    seqPoints_ = std::move(r.points);
+    seqPointObs_ = std::move(r.pointObs);
     return true;
   }
 

@@ -322,14 +322,16 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
     }
     std::vector<Vec3<Scalar>> pts;
     std::vector<int> ptTrack;
-    std::vector<std::vector<std::pair<int, Vec2<Scalar>>>> ptObs;
     for (std::size_t j = 0; j < P.points.size(); ++j) {
       if (!addTrackObservations(P, static_cast<int>(pts.size()), pointObs[j], frameVar, opt.minObservations)) continue;
       pts.push_back(P.points[j]);
       ptTrack.push_back(pointTrack[j]);
-      ptObs.push_back(std::move(pointObs[j]));
     }
     P.points = std::move(pts);
+    // The observation lists are in P now; they and the last round's result (rebuilt below) are
+    // not held through the adjustment (memory: about 50 bytes an observation each).
+    decltype(pointObs)().swap(pointObs);
+    decltype(res.pointObs)().swap(res.pointObs);
     // Gauge: fix the best-observed of the first adjusted frames; a scale prior to the farthest.
     std::vector<int> perPose(P.poses.size(), 0);
     for (const auto& b : P.observations) ++perPose[static_cast<std::size_t>(b.pose)];
