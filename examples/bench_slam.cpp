@@ -12,7 +12,7 @@
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion
 //   --masked-only  skip the unmasked runs (quicker iterations)
-//   --log          the masked runs' diagnostics (initialisation, keyframes, losses) on stderr
+//   --log          each run's diagnostics (initialisation, keyframes, losses) on stderr
 //   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
 //   --no-reloc       SlamOptions::relocalise off (a loss always re-initialises a new segment)
 //   --no-sequence    SlamOptions::sequenceRefine off (no full-sequence bundle adjustment)
@@ -23,6 +23,7 @@
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
 //   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
+//   --seq-std-ratio X  SlamOptions::sequence.maxTranslationStdRatio (a frame's translation std over the median, at most)
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
   double maxRayJump = -1;  // < 0: the library's default
   int relocAnchors = -1;   // < 0: the library's default
   int seqIterations = -1;  // < 0: the library's default
+  double seqStdRatio = -1;  // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -136,10 +138,12 @@ int main(int argc, char** argv) {
       frontCheck = false;
     } else if (a == "--seq-iterations") {
       seqIterations = std::stoi(next());
+    } else if (a == "--seq-std-ratio") {
+      seqStdRatio = std::stod(next());
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X]\n");
       return 2;
     }
   }
@@ -191,7 +195,11 @@ int main(int argc, char** argv) {
       if (!frontCheck) om.twoView.minInFrontRatio = ou.twoView.minInFrontRatio = 0;
       if (relocAnchors >= 0) om.relocAnchors = ou.relocAnchors = relocAnchors;
       if (seqIterations > 0) om.sequence.iterations = ou.sequence.iterations = seqIterations;
-      if (log) om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s] %s\n", name.c_str(), l.c_str()); };
+      if (seqStdRatio > 0) om.sequence.maxTranslationStdRatio = ou.sequence.maxTranslationStdRatio = seqStdRatio;
+      if (log) {
+        om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s masked] %s\n", name.c_str(), l.c_str()); };
+        ou.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s unmasked] %s\n", name.c_str(), l.c_str()); };
+      }
       hawor::MonoSlam<double> masked(cam, om), plain(cam, ou);
       std::vector<double> tm, tu;
       hawor::synth::SynthFrame<double> fr;

@@ -82,12 +82,12 @@ struct SequenceRefineOptions {
   /// with the points, and the frames between get a motion-only refinement against the adjusted
   /// points (neighbouring frames add little but cost a 6×6 block each in the reduced system).
   int maxAdjustedFrames = 200;
-  int denseMaxFrames = 400;
+  int denseMaxFrames = 400;           ///< dense reduced camera system up to this many frames
   /// A frame with a guessed position is resected when its rotation agrees with the guess's.
   Scalar maxResectionRotationDeg = Scalar(2);
   /// A frame whose translation is this many times less certain than the median frame's is not
   /// taken (see the conditioning step in refineSequence).
-  Scalar maxTranslationStdRatio = Scalar(8);           ///< dense reduced camera system up to this many frames
+  Scalar maxTranslationStdRatio = Scalar(8);
   int rounds = 3;                     ///< adjust → cull → re-triangulate rounds
   int iterations = 10;                ///< LM iterations per round
   Scalar sigmaPx = Scalar(1);
