@@ -1070,17 +1070,13 @@ class MonoSlam {
   /// kind (`anchor`) there (the oldest entry of that kind goes, its buffers reused); the store
   /// stays sorted by keyframe.
   void keepPyramid(std::vector<KeyframePyramid>& store, int capacity, int k, bool anchor = false) {
-    int count = 0;
-    for (const KeyframePyramid& e : store) count += e.anchor == anchor ? 1 : 0;
-    bool reused = false;
-    for (std::size_t i = 0; i < store.size() && count >= capacity && !reused; ++i) {
-      if (store[i].anchor != anchor) continue;
-      KeyframePyramid old = std::move(store[i]);
-      store.erase(store.begin() + static_cast<std::ptrdiff_t>(i));
-      store.push_back(std::move(old));
-      reused = true;
+    auto ofKind = [anchor](const KeyframePyramid& e) { return e.anchor == anchor; };
+    const auto oldest = std::find_if(store.begin(), store.end(), ofKind);
+    if (oldest != store.end() && std::count_if(store.begin(), store.end(), ofKind) >= capacity) {
+      std::rotate(oldest, oldest + 1, store.end());  // to the back, its buffers reused
+    } else {
+      store.emplace_back();
     }
-    if (!reused) store.emplace_back();
     store.back().kf = k;
     store.back().pyr = curPyr_;
     store.back().anchor = anchor;
@@ -1094,13 +1090,12 @@ class MonoSlam {
     const V3 z = kk.T.rotationMatrix().col(2);
     const Scalar cosMax = std::cos(opt_.relocAnchorDeg * Constants<Scalar>::pi() / Scalar(180));
     const Scalar maxDist = opt_.relocAnchorDepths * lastMedianDepth_;
-    bool anchor = opt_.relocAnchors > 0 && lastMedianDepth_ > Scalar(0);
-    for (const KeyframePyramid& e : relocPyr_) {
-      if (!anchor) break;
-      const Keyframe& ka = keyframes_[static_cast<std::size_t>(e.kf)];
-      anchor = !(e.anchor && ka.segment == kk.segment && V3(ka.T.rotationMatrix().col(2)).dot(z) >= cosMax &&
-                 (ka.T.translation() - kk.T.translation()).norm() <= maxDist);
-    }
+    const bool anchor = opt_.relocAnchors > 0 && lastMedianDepth_ > Scalar(0) &&
+                        std::none_of(relocPyr_.begin(), relocPyr_.end(), [&](const KeyframePyramid& e) {
+                          const Keyframe& ka = keyframes_[static_cast<std::size_t>(e.kf)];
+                          return e.anchor && ka.segment == kk.segment && V3(ka.T.rotationMatrix().col(2)).dot(z) >= cosMax &&
+                                 (ka.T.translation() - kk.T.translation()).norm() <= maxDist;
+                        });
     keepPyramid(relocPyr_, anchor ? opt_.relocAnchors : opt_.relocKeyframes, k, anchor);
   }
 
