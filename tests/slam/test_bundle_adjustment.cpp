@@ -81,6 +81,7 @@ struct Reference {
       }
     }
     for (const auto& pr : P.scalePriors) poseUsed[pr.poseA] = poseUsed[pr.poseB] = 1;
+    for (const auto& pr : P.positionPriors) poseUsed[pr.pose] = 1;
     for (std::size_t i = 0; i < P.poses.size(); ++i) {
       if (poseUsed[i] && !(P.poseFixed.size() && P.poseFixed[i])) freePose.push_back(int(i));
     }
@@ -114,6 +115,9 @@ struct Reference {
     for (const auto& pr : P.scalePriors) {
       r.push_back((poses[pr.poseB].translation() - poses[pr.poseA].translation()).norm() - pr.distance);
     }
+    for (const auto& pr : P.positionPriors) {
+      for (int a = 0; a < 3; ++a) r.push_back(poses[pr.pose].translation()(a) - pr.position(a));
+    }
     return Eigen::Map<Eigen::VectorXd>(r.data(), Eigen::Index(r.size()));
   }
 
@@ -134,6 +138,10 @@ struct Reference {
       F += pr.weight * r(i) * r(i);
       ++i;
     }
+    for (const auto& pr : P.positionPriors) {
+      F += pr.weight * r.segment<3>(i).squaredNorm();
+      i += 3;
+    }
     return F;
   }
 
@@ -151,6 +159,9 @@ struct Reference {
       i += 2;
     }
     for (const auto& pr : P.scalePriors) w(i++) = pr.weight;
+    for (const auto& pr : P.positionPriors) {
+      for (int a = 0; a < 3; ++a) w(i++) = pr.weight;
+    }
     return w;
   }
 
@@ -267,14 +278,15 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
     RobustLoss loss;
     double sigma, k;
     int variant;  // 0: poses 0,1 fixed; 1: + random weights incl. zeros, some fixed points;
-                  // 2: pose 0 fixed + scale prior
+                  // 2: pose 0 fixed + scale prior; 3: pose 0 fixed + position priors
     double minRadialCurvature;
   };
   const Case cases[] = {{"least squares", RobustLoss::None, 1.0, 1.0, 0, 1.0},
                         {"huber, weights, fixed points", RobustLoss::Huber, 1.0, 1.5, 1, 1.0},
                         {"cauchy, scale prior", RobustLoss::Cauchy, 1.0, 2.0, 2, 1.0},
                         {"least squares, scale prior", RobustLoss::None, 1.0, 1.0, 2, 1.0},
-                        {"huber, curvature correction", RobustLoss::Huber, 1.0, 1.5, 0, 0.1}};
+                        {"huber, curvature correction", RobustLoss::Huber, 1.0, 1.5, 0, 0.1},
+                        {"huber, position priors", RobustLoss::Huber, 1.0, 1.5, 3, 1.0}};
   unsigned seed = 40;
   for (const Case& c : cases) {
     Rng rng(++seed);
@@ -282,7 +294,7 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
     BAProblem<double>& P = s.problem;
     P.poseFixed.assign(P.poses.size(), 0);
     P.poseFixed[0] = 1;
-    if (c.variant != 2) P.poseFixed[1] = 1;
+    if (c.variant < 2) P.poseFixed[1] = 1;
     if (c.variant == 1) {
       for (auto& o : P.observations) {
         const bool zero = rng.uniform(0, 1) < 0.1;
@@ -298,6 +310,17 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
       sp.distance = (s.poses[3].translation() - s.poses[0].translation()).norm();
       sp.weight = 100.0;
       P.scalePriors.push_back(sp);
+    }
+    if (c.variant == 3) {
+      // Priors a few centimetres off the true centres (they compete with the images), one of
+      // them with weight 0 (no effect).
+      for (int v = 1; v < 4; ++v) {
+        BAPositionPrior<double> pp;
+        pp.pose = v;
+        pp.position = s.poses[static_cast<std::size_t>(v)].translation() + 0.03 * rng.unitVector();
+        pp.weight = v == 2 ? 0.0 : 400.0;
+        P.positionPriors.push_back(pp);
+      }
     }
     const Reference ref(P, c.loss, c.sigma, c.k);
     std::vector<SE3<double>> rp = P.poses;
@@ -571,6 +594,9 @@ TEST_CASE("bundleAdjust rejects malformed problems with hawor::Error", "[slam][b
     sp.poseA = sp.poseB = 1;
     p.scalePriors.push_back(sp);
   });
+  expectThrow([](BAProblem<double>& p) { p.positionPriors.push_back({3, Vec3<double>::Zero(), 1.0}); });
+  expectThrow([](BAProblem<double>& p) { p.positionPriors.push_back({0, Vec3<double>(0, std::nan(""), 0), 1.0}); });
+  expectThrow([](BAProblem<double>& p) { p.positionPriors.push_back({0, Vec3<double>::Zero(), -1.0}); });
   BAProblem<double> p = s.problem;
   BAOptions<double> bad;
   bad.sigmaPx = 0;

@@ -80,6 +80,15 @@ struct BAScalePrior {
   Scalar weight = Scalar(1e6);
 };
 
+/// Position prior w·‖c − p‖² on a camera centre c (T_w_c translation): a motion model's
+/// prediction p for that camera (e.g. the head model of head_motion.hpp).
+template <typename Scalar>
+struct BAPositionPrior {
+  int pose = 0;
+  Vec3<Scalar> position = Vec3<Scalar>::Zero();
+  Scalar weight = Scalar(1);
+};
+
 /// The problem, optimised in place by bundleAdjust. poseFixed / pointFixed: empty (nothing fixed)
 /// or one flag per pose / point.
 template <typename Scalar>
@@ -91,6 +100,7 @@ struct BAProblem {
   std::vector<char> poseFixed;
   std::vector<char> pointFixed;
   std::vector<BAScalePrior<Scalar>> scalePriors;
+  std::vector<BAPositionPrior<Scalar>> positionPriors;
 };
 
 /// The scale gauge of a monocular problem whose pose `anchor` is fixed: a prior holding the
@@ -333,6 +343,12 @@ void validate(const BAProblem<Scalar>& P, const BAOptions<Scalar>& opt) {
                   " needs a finite distance and weight >= 0");
     }
   }
+  for (std::size_t k = 0; k < P.positionPriors.size(); ++k) {
+    const auto& q = P.positionPriors[k];
+    if (q.pose < 0 || q.pose >= nC || !q.position.allFinite() || !(q.weight >= Scalar(0)) || !std::isfinite(q.weight)) {
+      throw Error("bundleAdjust: position prior " + std::to_string(k) + " needs a pose, a finite position and weight >= 0");
+    }
+  }
   if (opt.maxIterations < 0) throw Error("bundleAdjust: maxIterations must be >= 0");
   if (!(opt.sigmaPx > Scalar(0)) || !std::isfinite(opt.sigmaPx) || !(opt.robustScale > Scalar(0)) ||
       !(opt.initialLambda > Scalar(0)) || !std::isfinite(opt.initialLambda)) {
@@ -489,6 +505,9 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
       const Scalar e = baScalePriorResidual(poses[static_cast<std::size_t>(s->poseA)],
                                             poses[static_cast<std::size_t>(s->poseB)], s->distance);
       F += double(s->weight * e * e);
+    }
+    for (const auto& q : P.positionPriors) {
+      F += double(q.weight * (poses[static_cast<std::size_t>(q.pose)].translation() - q.position).squaredNorm());
     }
     if (sumSq) *sumSq = ss;
     return F;
@@ -672,6 +691,16 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
           priorOff[static_cast<std::size_t>(blockOf(cb, ca))].noalias() += w * Jb.transpose() * Ja;
         }
       }
+    }
+    // Position priors: r = c − p, ∂r/∂δ = [R_w_c, 0] (right perturbation, translation first).
+    for (const auto& q : P.positionPriors) {
+      const int cq = poseVar[static_cast<std::size_t>(q.pose)];
+      if (cq < 0 || !(q.weight > Scalar(0))) continue;
+      const SE3<Scalar>& T = P.poses[static_cast<std::size_t>(q.pose)];
+      const Mat3<Scalar> R = T.rotationMatrix();
+      const Vec3<Scalar> e = T.translation() - q.position;
+      Hcc[static_cast<std::size_t>(cq)].template topLeftCorner<3, 3>().noalias() += q.weight * R.transpose() * R;
+      gc[static_cast<std::size_t>(cq)].template head<3>().noalias() += q.weight * R.transpose() * e;
     }
     gradMax = Scalar(0);
     for (const auto& v : gc) gradMax = std::max(gradMax, v.cwiseAbs().maxCoeff());
