@@ -24,6 +24,7 @@
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
 //   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
 //   --seq-std-ratio X  SlamOptions::sequence.maxTranslationStdRatio (a frame's translation std over the median, at most)
+//   --head-prior-sigma X  SlamOptions::sequence.headPriorSigma (the head prior's σ over its fit's rms residual); 0 turns the prior off
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -83,6 +84,7 @@ int main(int argc, char** argv) {
   int relocAnchors = -1;   // < 0: the library's default
   int seqIterations = -1;  // < 0: the library's default
   double seqStdRatio = -1;  // < 0: the library's default
+  double headPriorSigma = -1;  // < 0: the library's default; 0: off
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -120,6 +122,8 @@ int main(int argc, char** argv) {
       relocalise = false;
     } else if (a == "--no-sequence") {
       sequence = false;
+    } else if (a == "--head-prior-sigma") {
+      headPriorSigma = std::stod(next());
     } else if (a == "--no-head-model") {
       headModel = false;
     } else if (a == "--no-head-join-all") {
@@ -143,7 +147,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X]\n");
       return 2;
     }
   }
@@ -186,6 +190,8 @@ int main(int argc, char** argv) {
       om.relocalise = ou.relocalise = relocalise;
       om.sequenceRefine = ou.sequenceRefine = sequence;
       om.headModelFill = ou.headModelFill = headModel;
+      if (headPriorSigma == 0) om.sequence.headPrior = ou.sequence.headPrior = false;
+      if (headPriorSigma > 0) om.sequence.headPriorSigma = ou.sequence.headPriorSigma = headPriorSigma;
       om.headModelJoinAll = ou.headModelJoinAll = headJoinAll;
       om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;

@@ -1902,7 +1902,10 @@ class MonoSlam {
       opt_.log("sequence refinement: " + std::to_string(adj) + " of " + std::to_string(n) + " frames, " +
                std::to_string(r.points.size()) + " points, " + std::to_string(r.observations) + " observations, rms " +
                std::to_string(double(r.finalRmsPx)) + " px, " + std::to_string(r.iterations) + " iterations, " +
-               std::to_string(r.illConditioned) + " frames ill-conditioned");
+               std::to_string(r.illConditioned) + " frames ill-conditioned" +
+               (r.headPriorRounds > 0 ? ", head prior in " + std::to_string(r.headPriorRounds) + " rounds (fit rms " +
+                                            std::to_string(double(r.headPriorRms)) + ")"
+                                      : std::string()));
     }
     if (r.points.empty()) return false;
     refinedFrames_ = 0;  // the last refinement's count (it runs again after a focal change)

@@ -17,6 +17,13 @@
 //      the adjusted frames and the points. Gauge (7 freedoms): the adjusted frame with the most
 //      observations among the first ones is fixed and a scale prior holds its distance to the
 //      adjusted frame farthest from it.
+//      A head that stands and turns (the adjusted frames pass head_motion.hpp's head tests: the
+//      eye rides a sphere about the neck, c = n + M·z) adds a position prior on every adjusted
+//      frame toward the model's prediction, σ = headPriorSigma × the fit's rms residual. Views
+//      linked to each other only through a fast turn (a few tracks) otherwise keep a relative
+//      scale and offset that the images barely determine; the model ties them to the rest as
+//      a motion model ties frames in a filter. A walk, or a body that sways, fails the tests and
+//      gets no prior.
 //   4. rounds times: after each adjustment the inlier gate becomes 3σ̂ (σ̂ from the median
 //      residual, within [minGatePx, maxReprojPx]) and every track is re-triangulated against the
 //      new poses with it (a track that slid by a few pixels keeps one side of its jump; points
@@ -38,6 +45,7 @@
 #include "hawor/geometry/camera.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/slam/bundle_adjustment.hpp"
+#include "hawor/slam/head_motion.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/triangulation.hpp"
 
@@ -92,6 +100,11 @@ struct SequenceRefineOptions {
   int iterations = 10;                ///< LM iterations per round
   Scalar sigmaPx = Scalar(1);
   Scalar robustScale = Scalar(2);     ///< Huber scale in units of σ
+  /// Step 3's head prior (file comment): on when the adjusted frames pass the head tests of
+  /// `headModel`, with σ = headPriorSigma × the fit's rms residual.
+  bool headPrior = true;
+  Scalar headPriorSigma = Scalar(4);
+  HeadModelOptions<Scalar> headModel;
 };
 
 template <typename Scalar>
@@ -113,6 +126,8 @@ struct SequenceRefineResult {
   int observations = 0;                  ///< inlier observations in the last adjustment
   Scalar finalRmsPx = Scalar(0);
   int iterations = 0;
+  int headPriorRounds = 0;               ///< adjustments that had the head prior
+  Scalar headPriorRms = Scalar(0);       ///< its fit's rms residual in the last such round (world units)
 };
 
 namespace seqref_detail {
@@ -183,6 +198,32 @@ bool triangulateTrack(const PinholeCamera<Scalar>& cam, const std::vector<SE3<Sc
   return false;
 }
 
+/// Step 3's head prior: the head model c = n + M·z (head_motion.hpp) fitted to the problem's
+/// cameras; where it passes the head tests, a position prior on every camera toward its
+/// prediction, weight 1/σ², σ = headPriorSigma × the fit's rms residual. Returns true when added.
+template <typename Scalar>
+bool addHeadPrior(BAProblem<Scalar>& P, const SequenceRefineOptions<Scalar>& opt, SequenceRefineResult<Scalar>& res) {
+  std::vector<int> idx(P.poses.size());
+  for (std::size_t v = 0; v < idx.size(); ++v) idx[v] = static_cast<int>(v);
+  const HeadModelFit<Scalar> fit = fitHeadModel(P.poses, idx, opt.headModel);
+  if (!passesHeadTests(fit, opt.headModel) || fit.spreadDeg < opt.headModel.minSpreadDeg) return false;
+  Scalar ss = 0;
+  for (const auto& T : P.poses) ss += (T.translation() - fit.predict(T)).squaredNorm();
+  const Scalar rms = std::sqrt(ss / Scalar(P.poses.size()));
+  const Scalar w = Scalar(1) / (opt.headPriorSigma * opt.headPriorSigma * rms * rms);
+  if (!(rms > Scalar(0)) || !std::isfinite(w)) return false;
+  for (std::size_t v = 0; v < P.poses.size(); ++v) {
+    BAPositionPrior<Scalar> q;
+    q.pose = static_cast<int>(v);
+    q.position = fit.predict(P.poses[v]);
+    q.weight = w;
+    P.positionPriors.push_back(q);
+  }
+  ++res.headPriorRounds;
+  res.headPriorRms = rms;
+  return true;
+}
+
 }  // namespace seqref_detail
 
 /// The refinement of the file comment. `frames[f]`: frame f's track observations (pixels);
@@ -203,7 +244,7 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
   }
   if (!(opt.minParallaxDeg >= Scalar(0)) || opt.minObservations < 2 || !(opt.maxReprojPx > Scalar(0)) ||
       !(opt.minGatePx > Scalar(0) && opt.minGatePx <= opt.maxReprojPx) || opt.maxAdjustedFrames < 2 ||
-      !(opt.maxTranslationStdRatio > Scalar(1)) ||
+      !(opt.maxTranslationStdRatio > Scalar(1)) || (opt.headPrior && !(opt.headPriorSigma > Scalar(0))) ||
       opt.minFrameObservations < 3 || opt.rounds < 1 || opt.iterations < 1) {
     throw Error("refineSequence: invalid options");
   }
@@ -342,6 +383,7 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
     P.poseFixed.assign(P.poses.size(), 0);
     P.poseFixed[static_cast<std::size_t>(fixedV)] = 1;
     addFarthestScalePrior(P, fixedV);
+    if (opt.headPrior) seqref_detail::addHeadPrior(P, opt, res);
     BAOptions<Scalar> bo;
     bo.maxIterations = opt.iterations;
     bo.loss = RobustLoss::Huber;
