@@ -7,7 +7,7 @@
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
-//              [--max-ray-jump DEG] [--no-front-check]
+//              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion
@@ -25,6 +25,8 @@
 //   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
 //   --seq-std-ratio X  SlamOptions::sequence.maxTranslationStdRatio (a frame's translation std over the median, at most)
 //   --head-prior-sigma X  SlamOptions::sequence.headPriorSigma (the head prior's σ over its fit's rms residual); 0 turns the prior off
+//   --no-head-gap-whole  SlamOptions::headModel.wholeSequenceFallback off (a gap whose window fails keeps the interpolation)
+//   --head-join-motion-r2 X  SlamOptions::headModel.joinMinMotionR2 (the segment join's motion R² gate, default 0.7)
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -85,6 +87,8 @@ int main(int argc, char** argv) {
   int seqIterations = -1;  // < 0: the library's default
   double seqStdRatio = -1;  // < 0: the library's default
   double headPriorSigma = -1;  // < 0: the library's default; 0: off
+  bool headGapWhole = true;
+  double headJoinMotionR2 = -2;  // < -1: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -124,6 +128,10 @@ int main(int argc, char** argv) {
       sequence = false;
     } else if (a == "--head-prior-sigma") {
       headPriorSigma = std::stod(next());
+    } else if (a == "--no-head-gap-whole") {
+      headGapWhole = false;
+    } else if (a == "--head-join-motion-r2") {
+      headJoinMotionR2 = std::stod(next());
     } else if (a == "--no-head-model") {
       headModel = false;
     } else if (a == "--no-head-join-all") {
@@ -147,7 +155,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X]\n");
       return 2;
     }
   }
@@ -193,6 +201,8 @@ int main(int argc, char** argv) {
       if (headPriorSigma == 0) om.sequence.headPrior = ou.sequence.headPrior = false;
       if (headPriorSigma > 0) om.sequence.headPriorSigma = ou.sequence.headPriorSigma = headPriorSigma;
       om.headModelJoinAll = ou.headModelJoinAll = headJoinAll;
+      om.headModel.wholeSequenceFallback = ou.headModel.wholeSequenceFallback = headGapWhole;
+      if (headJoinMotionR2 >= -1) om.headModel.joinMinMotionR2 = ou.headModel.joinMinMotionR2 = headJoinMotionR2;
       om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;

@@ -369,3 +369,92 @@ TEST_CASE("joinSegmentsByHeadModel: usable segments joined, a short one left out
   CHECK_THROWS_AS(hawor::joinSegmentsByHeadModel(T, posed, std::vector<int>{0, 130, 120, 240}), hawor::Error);
   CHECK_THROWS_AS(hawor::joinSegmentsByHeadModel(T, std::vector<char>(3, 1), first), hawor::Error);
 }
+
+TEST_CASE("fillGapsByHeadModel: a gap beside a fixation takes the whole sequence's model", "[slam][head]") {
+  // Frames 0-24 turn from yaw −0.8 to 0 (the gap: no map yet), 25-129 fixate (yaw within ±1°:
+  // the window's posed frames cannot fit a model), 130-329 turn widely. The eye 9 cm in front of
+  // a vertical neck, 1 mm noise.
+  Rng rng(41);
+  const int n = 330;
+  const Eigen::Vector3d neck(0.4, -0.3, 1.6);
+  std::vector<hawor::SE3<double>> truth;
+  for (int i = 0; i < n; ++i) {
+    const double t = i / 30.0;
+    double yaw;
+    if (i < 25) {
+      yaw = -0.8 * (1.0 - i / 25.0);
+    } else if (i < 130) {
+      yaw = 0.015 * std::sin(3.0 * t);
+    } else {
+      yaw = 1.1 * std::sin(0.9 * (t - 130.0 / 30.0));
+    }
+    const double pitch = -0.2 + 0.1 * std::sin(0.7 * t);
+    const Eigen::Vector3d h(std::cos(yaw), std::sin(yaw), 0.0);
+    truth.push_back(lookPose(yaw, pitch, neck + 0.09 * h + rng.scaledUnit(0.0, 0.001)));
+  }
+  std::vector<char> posed(static_cast<std::size_t>(n), 1), rot(static_cast<std::size_t>(n), 1);
+  std::vector<hawor::SE3<double>> held = truth;
+  for (int i = 0; i < 25; ++i) {
+    posed[static_cast<std::size_t>(i)] = 0;
+    held[static_cast<std::size_t>(i)] = hawor::SE3<double>(truth[static_cast<std::size_t>(i)].rotation(), truth[25].translation());
+  }
+  // The window's own fit fails (views spread ~2°): without the fallback the gap keeps its positions.
+  hawor::HeadModelOptions<double> noFallback;
+  noFallback.wholeSequenceFallback = false;
+  std::vector<hawor::SE3<double>> T0 = held;
+  CHECK(hawor::fillGapsByHeadModel(T0, posed, rot, noFallback) == 0);
+  std::vector<hawor::SE3<double>> T = held;
+  std::string report;
+  CHECK(hawor::fillGapsByHeadModel(T, posed, rot, hawor::HeadModelOptions<double>(), &report) == 25);
+  INFO(report);
+  CHECK(report.find("whole sequence") != std::string::npos);
+  double heldErr = 0, err = 0;
+  for (int i = 0; i < 25; ++i) {
+    heldErr += (held[static_cast<std::size_t>(i)].translation() - truth[static_cast<std::size_t>(i)].translation()).norm();
+    err += (T[static_cast<std::size_t>(i)].translation() - truth[static_cast<std::size_t>(i)].translation()).norm();
+  }
+  INFO("gap mean error held " << heldErr / 25 << " m, whole-sequence model " << err / 25 << " m");
+  CHECK(err < heldErr / 3);
+  CHECK(err / 25 < 0.01);
+  // A walk beside the same gap: the whole sequence fails the tests too, nothing changes.
+  std::vector<hawor::SE3<double>> W = held;
+  for (int i = 25; i < n; ++i) {
+    W[static_cast<std::size_t>(i)] = hawor::SE3<double>(truth[static_cast<std::size_t>(i)].rotation(),
+                                                        hawor::Vec3<double>(0.04 * i, 0.5 * std::sin(0.02 * i), 1.6));
+  }
+  CHECK(hawor::fillGapsByHeadModel(W, posed, rot) == 0);
+}
+
+TEST_CASE("fitHeadJoinAll: a short segment of narrow view spread is joined at a lower motion R²", "[slam][head]") {
+  // Segment 0 (frames 0-59): the head turns over ~23° only, positions with 2 mm noise, so the
+  // motion over 3 frames is small against it; segment 1 (60-299, the reference) turns widely.
+  // Segment 0 in a map of its own (c − o)/s.
+  Rng rng(43);
+  const int n = 300;
+  const Eigen::Vector3d neck(-0.2, 0.5, 1.6);
+  const double sTrue = 0.4;
+  const Eigen::Vector3d o(0.3, -0.2, 0.1);
+  std::vector<hawor::SE3<double>> truth, T;
+  std::vector<std::vector<int>> groups(2);
+  for (int i = 0; i < n; ++i) {
+    const double t = i / 30.0;
+    const double yaw = i < 60 ? 0.24 * std::sin(2.0 * t) : 1.2 * std::sin(0.9 * t) + 0.3 * std::sin(2.3 * t);
+    const double pitch = -0.22 + 0.1 * std::sin(0.7 * t + 1.0);
+    const Eigen::Vector3d h(std::cos(yaw), std::sin(yaw), 0.0);
+    truth.push_back(lookPose(yaw, pitch, neck + 0.09 * h + rng.scaledUnit(0.0, 0.002)));
+    Eigen::Vector3d c = truth.back().translation();
+    if (i < 60) c = (c - o) / sTrue;
+    T.push_back(hawor::SE3<double>(truth.back().rotation(), hawor::Vec3<double>(c)));
+    groups[i < 60 ? 0 : 1].push_back(i);
+  }
+  hawor::HeadModelOptions<double> strict;
+  strict.joinMinMotionR2 = strict.minMotionR2;
+  const hawor::HeadJoinAll<double> refused = hawor::fitHeadJoinAll(T, groups, 1, strict);
+  const hawor::HeadJoinAll<double> j = hawor::fitHeadJoinAll(T, groups, 1);
+  INFO("motion R2 " << j.fit.motionR2 << ", R2 " << j.fit.r2 << ", spreads " << j.spreadDeg[0] << "/" << j.spreadDeg[1] << " deg, scale "
+                    << j.s[0] << " for " << sTrue);
+  CHECK(j.fit.motionR2 < strict.minMotionR2);
+  CHECK_FALSE(refused.ok);
+  REQUIRE(j.ok);
+  CHECK(j.s[0] == Approx(sTrue).epsilon(0.03));
+}
