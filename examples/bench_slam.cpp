@@ -8,6 +8,7 @@
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
+//              [--no-head-prejoin]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion
@@ -27,6 +28,7 @@
 //   --head-prior-sigma X  SlamOptions::sequence.headPriorSigma (the head prior's σ over its fit's rms residual); 0 turns the prior off
 //   --no-head-gap-whole  SlamOptions::headModel.wholeSequenceFallback off (a gap whose window fails keeps the interpolation)
 //   --head-join-motion-r2 X  SlamOptions::headModel.joinMinMotionR2 (the segment join's motion R² gate, default 0.7)
+//   --no-head-prejoin  SlamOptions::headModelJoinBeforeRefine off (segments joined by one model only after the sequence refinement)
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -87,7 +89,7 @@ int main(int argc, char** argv) {
   int seqIterations = -1;  // < 0: the library's default
   double seqStdRatio = -1;  // < 0: the library's default
   double headPriorSigma = -1;  // < 0: the library's default; 0: off
-  bool headGapWhole = true;
+  bool headGapWhole = true, headPrejoin = true;
   double headJoinMotionR2 = -2;  // < -1: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -128,6 +130,8 @@ int main(int argc, char** argv) {
       sequence = false;
     } else if (a == "--head-prior-sigma") {
       headPriorSigma = std::stod(next());
+    } else if (a == "--no-head-prejoin") {
+      headPrejoin = false;
     } else if (a == "--no-head-gap-whole") {
       headGapWhole = false;
     } else if (a == "--head-join-motion-r2") {
@@ -155,7 +159,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin]\n");
       return 2;
     }
   }
@@ -202,6 +206,7 @@ int main(int argc, char** argv) {
       if (headPriorSigma > 0) om.sequence.headPriorSigma = ou.sequence.headPriorSigma = headPriorSigma;
       om.headModelJoinAll = ou.headModelJoinAll = headJoinAll;
       om.headModel.wholeSequenceFallback = ou.headModel.wholeSequenceFallback = headGapWhole;
+      om.headModelJoinBeforeRefine = ou.headModelJoinBeforeRefine = headPrejoin;
       if (headJoinMotionR2 >= -1) om.headModel.joinMinMotionR2 = ou.headModel.joinMinMotionR2 = headJoinMotionR2;
       om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;
