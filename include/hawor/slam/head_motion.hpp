@@ -181,6 +181,10 @@ int fillGapsByHeadModel(std::vector<SE3<Scalar>>& T, const std::vector<char>& po
                 std::to_string(rotationKnown.size()) + " rotation flags");
   }
   int changed = 0;
+  auto usable = [&](const HeadModelFit<Scalar>& f) { return passesHeadTests(f, opt) && f.spreadDeg >= opt.minSpreadDeg; };
+  // The whole sequence's model (posed frames only: the same for every gap), fitted at most once.
+  bool wholeFitted = false;
+  HeadModelFit<Scalar> wholeFit;
   for (int a = 0; a < n;) {
     if (posed[static_cast<std::size_t>(a)]) {
       ++a;
@@ -208,13 +212,16 @@ int fillGapsByHeadModel(std::vector<SE3<Scalar>>& T, const std::vector<char>& po
     }
     HeadModelFit<Scalar> fit = fitHeadModel(T, idx, opt);
     bool whole = false;
-    if (opt.wholeSequenceFallback && !(passesHeadTests(fit, opt) && fit.spreadDeg >= opt.minSpreadDeg)) {
-      std::vector<int> all;
-      for (int f = 0; f < n; ++f) {
-        if (posed[static_cast<std::size_t>(f)]) all.push_back(f);
+    if (opt.wholeSequenceFallback && !usable(fit)) {
+      if (!wholeFitted) {
+        std::vector<int> all;
+        for (int f = 0; f < n; ++f) {
+          if (posed[static_cast<std::size_t>(f)]) all.push_back(f);
+        }
+        wholeFit = fitHeadModel(T, all, opt);
+        wholeFitted = true;
       }
-      const HeadModelFit<Scalar> g = fitHeadModel(T, all, opt);
-      if (passesHeadTests(g, opt) && g.spreadDeg >= opt.minSpreadDeg) fit = g, whole = true;
+      if (usable(wholeFit)) fit = wholeFit, whole = true;
     }
     if (report) {
       *report += " gap " + std::to_string(a) + "-" + std::to_string(b - 1) + ": " + std::to_string(fit.frames) +
@@ -223,7 +230,7 @@ int fillGapsByHeadModel(std::vector<SE3<Scalar>>& T, const std::vector<char>& po
                  std::to_string(double(fit.spreadDeg)) + " deg, front " + std::to_string(double(fit.frontCos)) +
                  ", radius spread " + std::to_string(double(fit.radiusSpread)) + ";";
     }
-    if (passesHeadTests(fit, opt) && fit.spreadDeg >= opt.minSpreadDeg) {
+    if (usable(fit)) {
       const int left = a - 1, right = b < n ? b : -1;
       const V3 eL = left >= 0 ? V3(T[static_cast<std::size_t>(left)].translation() - fit.predict(T[static_cast<std::size_t>(left)])) : V3::Zero();
       const V3 eR = right >= 0 ? V3(T[static_cast<std::size_t>(right)].translation() - fit.predict(T[static_cast<std::size_t>(right)])) : V3::Zero();
