@@ -8,10 +8,11 @@
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
-//              [--no-head-prejoin]
+//              [--no-head-prejoin] [--coast-frames N]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
-//                  hand coverage (fraction of the image), estimated camera-to-world quaternion
+//                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
+//                  relative to the first frame (the estimate's world)
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          each run's diagnostics (initialisation, keyframes, losses) on stderr
 //   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
@@ -29,6 +30,7 @@
 //   --no-head-gap-whole  SlamOptions::headModel.wholeSequenceFallback off (a gap whose window fails keeps the interpolation)
 //   --head-join-motion-r2 X  SlamOptions::headModel.joinMinMotionR2 (the segment join's motion R² gate, default 0.7)
 //   --no-head-prejoin  SlamOptions::headModelJoinBeforeRefine off (segments joined by one model only after the sequence refinement)
+//   --coast-frames N  SlamOptions::coastFrames (frames a turn's rotation is carried on without rays, default 6; 0 holds it)
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -91,6 +93,7 @@ int main(int argc, char** argv) {
   double headPriorSigma = -1;  // < 0: the library's default; 0: off
   bool headGapWhole = true, headPrejoin = true;
   double headJoinMotionR2 = -2;  // < -1: the library's default
+  int coastFrames = -1;          // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -136,6 +139,8 @@ int main(int argc, char** argv) {
       headGapWhole = false;
     } else if (a == "--head-join-motion-r2") {
       headJoinMotionR2 = std::stod(next());
+    } else if (a == "--coast-frames") {
+      coastFrames = std::stoi(next());
     } else if (a == "--no-head-model") {
       headModel = false;
     } else if (a == "--no-head-join-all") {
@@ -159,7 +164,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N]\n");
       return 2;
     }
   }
@@ -208,6 +213,7 @@ int main(int argc, char** argv) {
       om.headModel.wholeSequenceFallback = ou.headModel.wholeSequenceFallback = headGapWhole;
       om.headModelJoinBeforeRefine = ou.headModelJoinBeforeRefine = headPrejoin;
       if (headJoinMotionR2 >= -1) om.headModel.joinMinMotionR2 = ou.headModel.joinMinMotionR2 = headJoinMotionR2;
+      if (coastFrames >= 0) om.coastFrames = ou.coastFrames = coastFrames;
       om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
@@ -225,12 +231,14 @@ int main(int argc, char** argv) {
       std::vector<double> tm, tu;
       hawor::synth::SynthFrame<double> fr;
       std::vector<hawor::Vec3<double>> gt;
+      std::vector<hawor::Mat3<double>> gtR;  // camera-to-world rotations (for --dump)
       std::vector<double> coverage;
       int cov30 = 0;
       double maxCov = 0;
       for (int i = 0; i < n; ++i) {
         seq.renderFrame(i, fr);
         gt.push_back(fr.worldFromCamera.t);
+        gtR.push_back(fr.worldFromCamera.R);
         coverage.push_back(fr.coverage);
         cov30 += fr.coverage >= 0.3 ? 1 : 0;
         maxCov = std::max(maxCov, fr.coverage);
@@ -254,12 +262,14 @@ int main(int argc, char** argv) {
         for (const auto& T : r.poses) est.push_back(T.translation());
         if (!dumpPrefix.empty()) {
           std::ofstream d(dumpPrefix + "_" + name + "_" + (m == 0 ? "masked" : "unmasked") + ".csv");
-          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe,coverage,eqx,eqy,eqz,eqw\n";
+          d << "frame,gx,gy,gz,ex,ey,ez,status,keyframe,coverage,eqx,eqy,eqz,eqw,gqx,gqy,gqz,gqw\n";
           for (std::size_t i = 0; i < est.size(); ++i) {
             const Eigen::Quaterniond q(r.poses[i].rotationMatrix());
+            // The ground truth's rotation relative to the first frame (the estimate's world).
+            const Eigen::Quaterniond qg(hawor::Mat3<double>(gtR.front().transpose() * gtR[i]));
             d << i << ',' << gt[i](0) << ',' << gt[i](1) << ',' << gt[i](2) << ',' << est[i](0) << ',' << est[i](1) << ','
               << est[i](2) << ',' << int(r.status[i]) << ',' << int(r.keyframe[i]) << ',' << coverage[i] << ',' << q.x() << ','
-              << q.y() << ',' << q.z() << ',' << q.w() << '\n';
+              << q.y() << ',' << q.z() << ',' << q.w() << ',' << qg.x() << ',' << qg.y() << ',' << qg.z() << ',' << qg.w() << '\n';
           }
         }
         RunStats st;

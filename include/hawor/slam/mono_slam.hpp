@@ -180,6 +180,11 @@ struct SlamOptions {
   Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
   TurnBridgeOptions<Scalar> bridge;
   int lostFramesBeforeReset = 4;
+  /// In turn mode, a frame whose tracked rays give no rotation turns on at the last step's
+  /// angular velocity (coastRotation), for at most coastFrames frames in a row, from a step of at
+  /// most coastMaxStepDeg (a head peaks near 600°/s, 20° a frame at 30 fps); 0: held instead.
+  int coastFrames = 6;
+  Scalar coastMaxStepDeg = Scalar(20);
   /// Before a map, tracks more than this far off the frame's rotation from the rays are dropped
   /// (dropJumpedTracks); 0: off. Measured on fast_turns seeds 1-8 (bench_slam, masked /
   /// unmasked ATE sums, 300 frames and the first 100): 5° 21.3 / 19.0 and 39.9 / 29.2, 6° 22.7 /
@@ -619,6 +624,7 @@ class MonoSlam {
     SlamStatus status = SlamStatus::Interpolated;
     bool posed = false;        ///< T comes from a map (tracked) rather than a guess
     bool rotationKnown = true; ///< rotation from rays/tracking (false: only interpolate)
+    bool coasted = false;      ///< rotation carried on from the last steps (coastRotation)
     int inliers = 0;
     CoarseMask mask;           ///< hand mask, kept for the recent frames while initialising
     std::vector<int> obsTrack;
@@ -778,6 +784,30 @@ class MonoSlam {
     return true;
   }
 
+  /// SlamOptions::coastFrames: frame f's rotation when the tracked rays give none, in turn mode:
+  /// the last step carried on, R_f = R_{f−1}·(R_{f−2}ᵀ·R_{f−1}) (constant angular velocity),
+  /// position held; at most coastFrames frames in a row and only from a step of at most
+  /// coastMaxStepDeg. A head turning onto a bare wall keeps turning while no track survives;
+  /// holding the rotation instead loses the whole turn (fast_turns seed 8: 66° over frames 88–91)
+  /// and every later frame, posed or not, keeps that offset.
+  bool coastRotation(int f) {
+    Frame& fr = frames_.back();
+    if (opt_.coastFrames <= 0 || !turning_ || f < 2) return false;
+    const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
+    const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
+    if (!p1.rotationKnown || !p2.rotationKnown) return false;
+    int run = 0;
+    while (run < f && frames_[static_cast<std::size_t>(f - 1 - run)].coasted) ++run;
+    if (run >= opt_.coastFrames) return false;
+    const Mat3<Scalar> R1 = p1.T.rotationMatrix(), R2 = p2.T.rotationMatrix();
+    if (rotationAngleDeg(p2.T, p1.T) > opt_.coastMaxStepDeg) return false;
+    fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), p1.T.translation());
+    fr.rotationKnown = true;
+    fr.coasted = true;
+    if (opt_.log) opt_.log("frame " + std::to_string(f) + ": no rotation from the rays, the last step's carried on");
+    return true;
+  }
+
   /// Before a map: a track whose ray is more than maxRayJumpDeg off the frame's rotation from
   /// the rays (f2 ≈ dRᵀ·f1) jumped — KLT locked onto a repeated or weak texture one period off
   /// at the onset of a turn, where the prediction lags — and is dropped: such tracks move
@@ -806,7 +836,7 @@ class MonoSlam {
       fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(frames_[static_cast<std::size_t>(f - 1)].T.rotationMatrix() * dR)),
                   frames_[static_cast<std::size_t>(f - 1)].T.translation());
       dropJumpedTracks(dR);
-    } else {
+    } else if (!coastRotation(f)) {
       fr.rotationKnown = false;
     }
     fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
@@ -1236,7 +1266,7 @@ class MonoSlam {
     const Frame& prev = frames_[static_cast<std::size_t>(f - 1)];
     if (rayRotation(dR)) {
       fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(prev.T.rotationMatrix() * dR)), prev.T.translation());
-    } else {
+    } else if (!coastRotation(f)) {
       fr.T = prev.T;
       fr.rotationKnown = false;
     }
