@@ -254,6 +254,16 @@ TEST_CASE("MonoSlam: bad input gives errors or statuses, never a crash", "[slam]
     bad.cx = std::nan("");
     CHECK_THROWS_AS(hawor::MonoSlam<double>(bad), hawor::Error);
   }
+  SECTION("invalid options") {
+    hawor::SlamOptions<double> o;
+    o.coastFrames = -1;
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("invalid options"));
+    o = hawor::SlamOptions<double>();
+    o.coastMaxStepDeg = std::nan("");
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("invalid options"));
+    o = hawor::SlamOptions<double>();
+    CHECK_NOTHROW(hawor::MonoSlam<double>(cam, o));
+  }
   SECTION("all-black frames and a mask over everything: statuses, identity poses") {
     for (int variant = 0; variant < 2; ++variant) {
       hawor::MonoSlam<double> slam(cam);

@@ -370,7 +370,7 @@ class MonoSlam {
     }
     if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
         opt_.keyframeMaxInterval < 1 || opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
-        opt_.maskBlock < 1) {
+        opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0))) {
       throw Error("MonoSlam: invalid options");
     }
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
