@@ -8,7 +8,7 @@
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
-//              [--no-head-prejoin] [--coast-frames N]
+//              [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
@@ -31,6 +31,7 @@
 //   --head-join-motion-r2 X  SlamOptions::headModel.joinMinMotionR2 (the segment join's motion R² gate, default 0.7)
 //   --no-head-prejoin  SlamOptions::headModelJoinBeforeRefine off (segments joined by one model only after the sequence refinement)
 //   --coast-frames N  SlamOptions::coastFrames (frames a turn's rotation is carried on without rays, default 6; 0 holds it)
+//   --refind-keyframes N  SlamOptions::refindKeyframes (recent keyframes whose points are re-found by KLT; default 0: off)
 //   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
 //   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
 //   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
@@ -94,6 +95,7 @@ int main(int argc, char** argv) {
   bool headGapWhole = true, headPrejoin = true;
   double headJoinMotionR2 = -2;  // < -1: the library's default
   int coastFrames = -1;          // < 0: the library's default
+  int refindKeyframes = -1;      // < 0: the library's default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -141,6 +143,8 @@ int main(int argc, char** argv) {
       headJoinMotionR2 = std::stod(next());
     } else if (a == "--coast-frames") {
       coastFrames = std::stoi(next());
+    } else if (a == "--refind-keyframes") {
+      refindKeyframes = std::stoi(next());
     } else if (a == "--no-head-model") {
       headModel = false;
     } else if (a == "--no-head-join-all") {
@@ -164,7 +168,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]\n");
       return 2;
     }
   }
@@ -214,6 +218,7 @@ int main(int argc, char** argv) {
       om.headModelJoinBeforeRefine = ou.headModelJoinBeforeRefine = headPrejoin;
       if (headJoinMotionR2 >= -1) om.headModel.joinMinMotionR2 = ou.headModel.joinMinMotionR2 = headJoinMotionR2;
       if (coastFrames >= 0) om.coastFrames = ou.coastFrames = coastFrames;
+      if (refindKeyframes >= 0) om.refindKeyframes = ou.refindKeyframes = refindKeyframes;
       om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
