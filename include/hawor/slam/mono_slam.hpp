@@ -664,8 +664,7 @@ class MonoSlam {
       const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
       predicted_ = p1.T * (p2.T.inverse() * p1.T);
     } else if (rot2 && turning_) {
-      const Mat3<Scalar> R1 = p1.T.rotationMatrix(), R2 = frames_[static_cast<std::size_t>(f - 2)].T.rotationMatrix();
-      predicted_ = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), p1.T.translation());
+      predicted_ = rotationCarriedOn(f);
     } else {
       predicted_ = p1.T;
     }
@@ -784,6 +783,14 @@ class MonoSlam {
     return true;
   }
 
+  /// Frame f's pose at the last step's angular velocity, position held: R_f = R_{f−1}·(R_{f−2}ᵀ·R_{f−1})
+  /// (KLT's guess in a turn, and coastRotation).
+  SE3T rotationCarriedOn(int f) const {
+    const SE3T& T1 = frames_[static_cast<std::size_t>(f - 1)].T;
+    const Mat3<Scalar> R1 = T1.rotationMatrix(), R2 = frames_[static_cast<std::size_t>(f - 2)].T.rotationMatrix();
+    return SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), T1.translation());
+  }
+
   /// SlamOptions::coastFrames: frame f's rotation when the tracked rays give none, in turn mode:
   /// the last step carried on, R_f = R_{f−1}·(R_{f−2}ᵀ·R_{f−1}) (constant angular velocity),
   /// position held; at most coastFrames frames in a row and only from a step of at most
@@ -799,9 +806,8 @@ class MonoSlam {
     int run = 0;
     while (run < f && frames_[static_cast<std::size_t>(f - 1 - run)].coasted) ++run;
     if (run >= opt_.coastFrames) return false;
-    const Mat3<Scalar> R1 = p1.T.rotationMatrix(), R2 = p2.T.rotationMatrix();
     if (rotationAngleDeg(p2.T, p1.T) > opt_.coastMaxStepDeg) return false;
-    fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), p1.T.translation());
+    fr.T = rotationCarriedOn(f);
     fr.rotationKnown = true;
     fr.coasted = true;
     if (opt_.log) opt_.log("frame " + std::to_string(f) + ": no rotation from the rays, the last step's carried on");
