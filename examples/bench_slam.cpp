@@ -24,6 +24,7 @@
 //   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
 //   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
 //   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
+//   --no-segment-links SlamOptions::segmentLinks off (no place recognition across a broken rotation chain)
 //   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
 //   --seq-std-ratio X  SlamOptions::sequence.maxTranslationStdRatio (a frame's translation std over the median, at most)
 //   --head-prior-sigma X  SlamOptions::sequence.headPriorSigma (the head prior's σ over its fit's rms residual); 0 turns the prior off
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
   bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, headJoinAll = true, headPlaceShort = true, revisit = true, thirdView = true,
-       turnBridge = true, frontCheck = true;
+       turnBridge = true, frontCheck = true, segmentLinks = true;
   double maxRayJump = -1;  // < 0: the library's default
   int relocAnchors = -1;   // < 0: the library's default
   int seqIterations = -1;  // < 0: the library's default
@@ -157,6 +158,8 @@ int main(int argc, char** argv) {
       thirdView = false;
     } else if (a == "--no-turn-bridge") {
       turnBridge = false;
+    } else if (a == "--no-segment-links") {
+      segmentLinks = false;
     } else if (a == "--max-ray-jump") {
       maxRayJump = std::stod(next());
     } else if (a == "--no-front-check") {
@@ -168,7 +171,7 @@ int main(int argc, char** argv) {
     } else if (a == "--reloc-anchors") {
       relocAnchors = std::stoi(next());
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--no-segment-links] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]\n");
       return 2;
     }
   }
@@ -223,6 +226,7 @@ int main(int argc, char** argv) {
       om.revisitSearch = ou.revisitSearch = revisit;
       om.twoViewThirdView = ou.twoViewThirdView = thirdView;
       om.turnBridge = ou.turnBridge = turnBridge;
+      om.segmentLinks = ou.segmentLinks = segmentLinks;
       if (maxRayJump >= 0) om.maxRayJumpDeg = ou.maxRayJumpDeg = maxRayJump;
       if (!frontCheck) om.twoView.minInFrontRatio = ou.twoView.minInFrontRatio = 0;
       if (relocAnchors >= 0) om.relocAnchors = ou.relocAnchors = relocAnchors;

@@ -68,9 +68,13 @@
 //      old segment (those points keep their old observations, so the
 //      bundle adjustments tie both); otherwise at the frame where tracking was lost: rotation from
 //      the ray chain, position from the last estimate, scale so that the median scene depth is
-//      continuous across the join. (No place recognition: a segment that later sees the old map
-//      again is not merged with it.)
-// finish(): segments re-scaled by the head's turn radius (turn_scale.hpp), a global bundle
+//      continuous across the join. A segment that later sees the old map again is not merged
+//      with it; but when the rotation chain to the old segment is broken (frames with no
+//      rotation, or one only carried on), the old segment's kept images are searched for the
+//      current view (PLACE RECOGNITION, segmentLinks) and the poses found in the old world fix
+//      the rotation of everything after the break in finish().
+// finish(): the rotation chains after a break turned by their agreeing segment links, segments
+// re-scaled by the head's turn radius (turn_scale.hpp), a global bundle
 // adjustment over all keyframes and points (per segment: first keyframe fixed, a scale prior on
 // its first baseline), every frame's pose re-estimated against the final map from its stored 2D
 // observations (RANSAC for frames without a tracked pose, robust LM otherwise); then the
@@ -87,7 +91,9 @@
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
 // refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to
-// relocAnchors anchor keyframes (about 1.6 MB each at 640×480); no other images. finish() first
+// relocAnchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; after
+// a broken rotation chain, until its links are found, the lost segment's too (segmentLinks); no
+// other images. finish() first
 // lets every image go, then holds every frame's observations twice more (≈ 24 bytes an
 // observation as the sequence refinement's input, 12 grouped by track inside it) and the
 // adjustment of at most sequence.maxAdjustedFrames frames.
@@ -257,6 +263,23 @@ struct SlamOptions {
   Scalar revisitMaxRotationDeg = Scalar(2); ///< PnP on the found points vs the tracked pose
   int relocKeyframes = 10;
   int relocSpacing = 15;
+  // Place recognition across a break of the rotation chain (a turn onto a bare wall: no frame
+  // gives its rotation, so the next segment's world is rotated by the unseen turn). The lost
+  // segment's kept images (relocalise's, and its last keyframe's) stay; at each keyframe after
+  // the break, and on every linkEveryFrames-th frame without a map pose, each is tried as the
+  // place: its points are searched by KLT around where it saw them (guesses: its own view, and
+  // turned about its vertical axis), and PnP-RANSAC gives the frame's pose in the old world (a
+  // link). finish() rotates the frames after the break (and everything after them) by
+  // C = R_old·Rᵀ when two links agree; the joins then place and scale them.
+  bool segmentLinks = true;
+  Scalar linkMaxShiftPx = Scalar(80);   ///< found this close to where the kept keyframe saw it
+  int linkMaxPoints = 200;              ///< KLT attempts per kept keyframe
+  int linkMinInliers = 20;
+  int linkYawSteps = 2;                 ///< guesses turned by ±1..linkYawSteps steps besides the view itself
+  Scalar linkYawStepDeg = Scalar(12);
+  int linkEveryFrames = 3;              ///< frames without a map pose searched (keyframes: each)
+  int linkEnough = 6;                   ///< links of a chain after which the search stops
+  Scalar linkAgreeDeg = Scalar(2);      ///< two links' rotations agree within this
   // Besides those (the most recent), up to relocAnchors ANCHOR keyframes of the segment are kept:
   // a keyframe becomes one when no anchor looks within relocAnchorDeg of its direction from within
   // relocAnchorDepths median scene depths of its position. A head that stays in place (looking
@@ -420,6 +443,9 @@ class MonoSlam {
     } else {
       trackPose(f);
     }
+    if (opt_.segmentLinks && !linkPyr_.empty() && !frames_.back().posed && f % std::max(1, opt_.linkEveryFrames) == 0) {
+      searchSegmentLinks(f);
+    }
     recordObservations(frames_.back());
     return frames_.back().status;
   }
@@ -436,11 +462,14 @@ class MonoSlam {
     curPyr_ = ImagePyramid();
     std::vector<KeyframePyramid>().swap(kfPyr_);
     std::vector<KeyframePyramid>().swap(relocPyr_);
+    std::vector<KeyframePyramid>().swap(linkPyr_);
+    lastKfPyr_ = KeyframePyramid();
     curMask_ = ImageU8();
     std::vector<unsigned char>().swap(maskTmp_);
     SlamResult<Scalar> res;
     const int n = static_cast<int>(frames_.size());
     if (n == 0) return res;
+    if (opt_.segmentLinks && resets_ > 0) applySegmentLinks();
     if ((opt_.turnScaleJoin || opt_.headModelJoin) && resets_ > 0) joinSegmentsByTurns();
     if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
       std::vector<int> all(keyframes_.size());
@@ -618,6 +647,12 @@ class MonoSlam {
     int kf = -1;
     ImagePyramid pyr;
     bool anchor = false;  ///< relocPyr_: an anchor (SlamOptions::relocAnchors), not a recent one
+  };
+  struct SegmentLink {
+    int frame;     ///< placed in the world of the segment before its chain's break
+    int oldFrame;  ///< by the kept image of this keyframe frame (in that segment)
+    SE3T T_old;    ///< its pose in that world
+    int inliers;
   };
   struct Frame {
     SE3T T;
@@ -980,7 +1015,20 @@ class MonoSlam {
     std::vector<char> linked;
     const bool joined = everInitialised_ && opt_.joinOldMap && joinToOldMap(f, tv, idx, Tref, s, linked);
     if (joined) --segment_;
-    if (!joined) relocPyr_.clear();  // a new segment: the old map is no longer the one tracked
+    if (!joined) {
+      // A new segment: the old map is no longer the one tracked. Its kept images stay for the
+      // place recognition when the rotation chain to it is broken (segmentLinks; else the images
+      // kept from an earlier break stay, for the same chain).
+      if (opt_.segmentLinks && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
+        linkPyr_.swap(relocPyr_);
+        // The segment's last keyframe too: a break comes in a turn, and the head often turns back.
+        if (lastKfPyr_.kf >= 0 && std::none_of(linkPyr_.begin(), linkPyr_.end(), [&](const KeyframePyramid& e) { return e.kf == lastKfPyr_.kf; })) {
+          linkPyr_.push_back(std::move(lastKfPyr_));
+        }
+      }
+      relocPyr_.clear();
+      lastKfPyr_ = KeyframePyramid();
+    }
     const int seg = segment_;
     if (!joined && everInitialised_ && lastMedianDepth_ > Scalar(0)) {
       std::vector<Scalar> d;
@@ -1152,6 +1200,10 @@ class MonoSlam {
     const bool current = keyframes_.back().frame == static_cast<int>(frames_.size()) - 1;
     // The current frame's pyramid, for re-finding this keyframe's points later.
     if (opt_.refindKeyframes > 0 && current) keepPyramid(kfPyr_, opt_.refindKeyframes, k);
+    if (opt_.segmentLinks && current) {
+      lastKfPyr_.kf = k;
+      lastKfPyr_.pyr.levels = curPyr_.levels;  // (buffers reused)
+    }
     if (opt_.relocalise && opt_.relocKeyframes > 0 && current &&
         (relocPyr_.empty() ||
          keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.relocSpacing)) {
@@ -1599,8 +1651,162 @@ class MonoSlam {
     }
   }
 
+  /// A frame that breaks the rotation chain: no rotation, or one only carried on (coastRotation;
+  /// right within a few degrees in a steady turn, far off when the turn changes under it).
+  bool chainBreak(int f) const {
+    const Frame& fr = frames_[static_cast<std::size_t>(f)];
+    return !fr.rotationKnown || fr.coasted;
+  }
+  /// The first frame of frame f's rotation chain: the frame after the last break before it
+  /// (0: unbroken since the start).
+  int chainStart(int f) const {
+    for (int g = f; g > 0; --g) {
+      if (chainBreak(g)) return g + 1;
+    }
+    return 0;
+  }
+
+  /// SlamOptions::segmentLinks: frame f (a keyframe, or every linkEveryFrames-th frame without a
+  /// map pose) whose rotation chain starts after the kept images of the segment before the break
+  /// (linkPyr_): each image is tried as the current view (its points searched by KLT around where
+  /// it saw them), and a PnP pose in that segment's world with linkMinInliers inliers is kept as
+  /// a link. Its tracks are not kept: the worlds differ.
+  void searchSegmentLinks(int f) {
+    if (linkPyr_.empty() || chainBreak(f)) return;
+    const int start = chainStart(f);
+    int linked = 0;
+    for (const SegmentLink& l : links_) linked += l.frame >= start ? 1 : 0;
+    if (linked >= opt_.linkEnough) {  // enough to agree on: the images go
+      std::vector<KeyframePyramid>().swap(linkPyr_);
+      return;
+    }
+    for (std::size_t i = 0; i < linkPyr_.size(); ++i) {
+      const Keyframe& kk = keyframes_[static_cast<std::size_t>(linkPyr_[i].kf)];
+      std::vector<char> use(linkPyr_.size(), 0);
+      use[i] = 1;
+      // The guesses: the kept keyframe's own view, then turned by ±linkYawStepDeg, ±2·… about
+      // its camera's vertical axis (a head turns mostly about it; KLT reaches about 8° from a
+      // guess at 640×480).
+      PnPRansacResult<Scalar> r;
+      std::size_t found = 0;
+      bool ok = false;
+      for (int h = 0; h <= 2 * opt_.linkYawSteps && !ok; ++h) {
+        const Scalar yaw = Scalar((h + 1) / 2 * (h % 2 == 1 ? 1 : -1)) * opt_.linkYawStepDeg * Constants<Scalar>::pi() / Scalar(180);
+        Mat3<Scalar> Ry = Mat3<Scalar>::Identity();
+        Ry(0, 0) = Ry(2, 2) = std::cos(yaw);
+        Ry(0, 2) = std::sin(yaw);
+        Ry(2, 0) = -std::sin(yaw);
+        const SE3T guess = kk.T * SE3T(SO3<Scalar>::fromMatrix(Ry), V3::Zero());
+        const std::size_t before = tracks_.size();
+        searchMapPoints(f, linkPyr_, guess, opt_.linkMaxShiftPx, opt_.linkMaxPoints, "segment link", &use);
+        std::vector<V3> X;
+        std::vector<V2> uv;
+        for (std::size_t j = before; j < tracks_.size(); ++j) {
+          X.push_back(points_[static_cast<std::size_t>(tracks_[j].point)].X);
+          uv.push_back(V2(Scalar(tracks_[j].uv(0)), Scalar(tracks_[j].uv(1))));
+        }
+        std::vector<char> drop(tracks_.size(), 0);
+        for (std::size_t j = before; j < tracks_.size(); ++j) drop[j] = 1;
+        removeTracks(drop);
+        found = std::max(found, X.size());
+        if (static_cast<int>(X.size()) < opt_.linkMinInliers) continue;
+        PnPRansacOptions<Scalar> po = opt_.pnp;
+        po.seed = opt_.pnp.seed + 0x68e31da4u + static_cast<std::uint32_t>(f);
+        po.minInliers = opt_.linkMinInliers;
+        r = solvePnPRansac(X, uv, cam_, po);
+        ok = r.ok() && r.numInliers >= opt_.linkMinInliers;
+      }
+      if (opt_.log) {
+        opt_.log("frame " + std::to_string(f) + ": segment link to keyframe " + std::to_string(linkPyr_[i].kf) + " (frame " +
+                 std::to_string(kk.frame) + "): at most " + std::to_string(found) + " points found" +
+                 (ok ? ", " + std::to_string(r.numInliers) + " PnP inliers, rotation " +
+                           std::to_string(double(rotationAngleDeg(frames_[static_cast<std::size_t>(f)].T, r.T_w_c))) + " deg from the frame's: kept"
+                     : std::string(": none")));
+      }
+      if (ok) links_.push_back(SegmentLink{f, kk.frame, r.T_w_c, r.numInliers});
+    }
+  }
+
+  /// SlamOptions::segmentLinks: the first frame that link l's correction applies to. After the
+  /// last frame without a rotation between its kept image and it; when there is none (only
+  /// rotations carried on: coastRotation), after the first run of carried-on frames.
+  int linkChainStart(const SegmentLink& l) const {
+    for (int g = l.frame; g > l.oldFrame; --g) {
+      if (!frames_[static_cast<std::size_t>(g)].rotationKnown) return g + 1;
+    }
+    int g = l.oldFrame + 1;
+    while (g <= l.frame && !chainBreak(g)) ++g;
+    while (g <= l.frame && chainBreak(g)) ++g;
+    return g;
+  }
+
+  /// SlamOptions::segmentLinks, in finish() before the joins. The links are grouped by the frame
+  /// their correction starts at (linkChainStart); for each group, in order, the corrections
+  /// C = R_old(f)·R(f)ᵀ (R_old with the corrections already made to the older frames) must
+  /// agree, two at different frames within linkAgreeDeg; the best-supported one (then the most
+  /// inliers) rotates the frames from the start on (keyframes and points with them) about the
+  /// start frame's position. The joins then place and scale the segments.
+  void applySegmentLinks() {
+    if (links_.empty()) return;
+    const int n = static_cast<int>(frames_.size());
+    const Scalar agreeRad = opt_.linkAgreeDeg * Constants<Scalar>::pi() / Scalar(180);
+    std::vector<int> starts(links_.size());
+    for (std::size_t i = 0; i < links_.size(); ++i) starts[i] = linkChainStart(links_[i]);
+    std::vector<int> order = starts;
+    std::sort(order.begin(), order.end());
+    order.erase(std::unique(order.begin(), order.end()), order.end());
+    std::vector<std::pair<int, Mat3<Scalar>>> made;  // (first frame, rotation) of each correction
+    for (int S : order) {
+      if (S >= n) continue;
+      std::vector<Mat3<Scalar>> C;
+      std::vector<const SegmentLink*> L;
+      for (std::size_t i = 0; i < links_.size(); ++i) {
+        const SegmentLink& l = links_[i];
+        if (starts[i] != S || l.frame < S) continue;
+        Mat3<Scalar> Rold = l.T_old.rotationMatrix();
+        for (const auto& m : made) {
+          if (m.first <= l.oldFrame) Rold = m.second * Rold;
+        }
+        C.push_back(Mat3<Scalar>(Rold * frames_[static_cast<std::size_t>(l.frame)].T.rotationMatrix().transpose()));
+        L.push_back(&l);
+      }
+      int best = -1, bestSupport = 0;
+      for (std::size_t i = 0; i < C.size(); ++i) {
+        int support = 0;
+        for (std::size_t j = 0; j < C.size(); ++j) {
+          if (L[j]->frame != L[i]->frame && SO3<Scalar>::fromMatrix(Mat3<Scalar>(C[i].transpose() * C[j])).log().norm() <= agreeRad) ++support;
+        }
+        if (support > bestSupport || (support > 0 && support == bestSupport && L[i]->inliers > L[static_cast<std::size_t>(best)]->inliers)) {
+          best = static_cast<int>(i), bestSupport = support;
+        }
+      }
+      if (opt_.log && !C.empty()) {
+        opt_.log("rotation chain from frame " + std::to_string(S) + ": " + std::to_string(C.size()) + " links" +
+                 (best >= 0 ? ", the best agreed by " + std::to_string(bestSupport) + ": rotated by " +
+                                  std::to_string(double(SO3<Scalar>::fromMatrix(C[static_cast<std::size_t>(best)]).log().norm() * Scalar(180) /
+                                                        Constants<Scalar>::pi())) + " deg"
+                            : std::string(", none agree")));
+      }
+      if (best < 0) continue;
+      const Mat3<Scalar> R = C[static_cast<std::size_t>(best)];
+      const V3 c = frames_[static_cast<std::size_t>(S)].T.translation();
+      auto move = [&](const SE3T& T) {
+        return SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R * T.rotationMatrix())), V3(R * (T.translation() - c) + c));
+      };
+      for (int g = S; g < n; ++g) frames_[static_cast<std::size_t>(g)].T = move(frames_[static_cast<std::size_t>(g)].T);
+      for (Keyframe& kf : keyframes_) {
+        if (kf.frame >= S) kf.T = move(kf.T);
+      }
+      for (MapPoint& p : points_) {
+        if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].frame >= S) p.X = V3(R * (p.X - c) + c);
+      }
+      made.emplace_back(S, R);
+    }
+  }
+
   void insertKeyframe(int f) {
     if (opt_.revisitSearch && opt_.relocalise) searchRevisits(f);
+    if (opt_.segmentLinks) searchSegmentLinks(f);
     Frame& fr = frames_.back();
     const int k = static_cast<int>(keyframes_.size());
     keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_});
@@ -2251,12 +2457,15 @@ class MonoSlam {
   std::vector<Frame> frames_;
   std::vector<KeyframePyramid> kfPyr_;  ///< the last refindKeyframes keyframes' pyramids
   std::vector<KeyframePyramid> relocPyr_;  ///< relocKeyframes keyframes' pyramids, relocSpacing apart
+  std::vector<KeyframePyramid> linkPyr_;   ///< the last segment's, after a broken rotation chain (segmentLinks)
+  KeyframePyramid lastKfPyr_;              ///< the last keyframe's (segmentLinks; kf −1: none)
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
   std::vector<Vec3<Scalar>> seqPoints_;  ///< finish(): the sequence refinement's points (world)
   std::vector<std::vector<std::pair<int, Vec2<Scalar>>>> seqPointObs_;  ///< and their (frame, pixel) observations
   std::vector<int> trackAlias_;  ///< track id → the id the same track had before a reset (−1: none; may be short)
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
+  std::vector<SegmentLink> links_;  ///< SlamOptions::segmentLinks
   int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0, revisitPoints_ = 0, refinedFrames_ = 0, headModelFrames_ = 0;
   /// Frame ranges [a, b) of the segments placed by the head model (headModelPlaceShort): their
   /// keyframe depths and points are in a scale of their own and are left out of the result.
