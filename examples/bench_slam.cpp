@@ -8,7 +8,7 @@
 //              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
 //              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
 //              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
-//              [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]
+//              [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N] [--no-segment-links]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
