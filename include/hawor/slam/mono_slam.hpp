@@ -1473,9 +1473,7 @@ class MonoSlam {
                    : std::string()));
     }
     if (!ok) {
-      std::vector<char> drop(tracks_.size(), 0);
-      for (std::size_t i = before; i < tracks_.size(); ++i) drop[i] = 1;
-      removeTracks(drop);
+      removeTracksFrom(before);
       return false;
     }
     fr.T = r.T_w_c;
@@ -1619,10 +1617,7 @@ class MonoSlam {
     searchMapPoints(f, relocPyr_, fr.T, opt_.revisitMaxShiftPx, opt_.revisitMaxPoints, "revisit", &use);
     std::vector<V3> X;
     std::vector<V2> uv;
-    for (std::size_t i = before; i < tracks_.size(); ++i) {
-      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
-      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
-    }
+    foundCorrespondences(before, X, uv);
     bool ok = false;
     PnPRansacResult<Scalar> r;
     if (static_cast<int>(X.size()) >= opt_.revisitMinInliers) {
@@ -1692,22 +1687,13 @@ class MonoSlam {
       bool ok = false;
       for (int h = 0; h <= 2 * opt_.linkYawSteps && !ok; ++h) {
         const Scalar yaw = Scalar((h + 1) / 2 * (h % 2 == 1 ? 1 : -1)) * opt_.linkYawStepDeg * Constants<Scalar>::pi() / Scalar(180);
-        Mat3<Scalar> Ry = Mat3<Scalar>::Identity();
-        Ry(0, 0) = Ry(2, 2) = std::cos(yaw);
-        Ry(0, 2) = std::sin(yaw);
-        Ry(2, 0) = -std::sin(yaw);
-        const SE3T guess = kk.T * SE3T(SO3<Scalar>::fromMatrix(Ry), V3::Zero());
+        const SE3T guess = kk.T * SE3T(SO3<Scalar>::exp(V3(Scalar(0), yaw, Scalar(0))), V3::Zero());
         const std::size_t before = tracks_.size();
         searchMapPoints(f, linkPyr_, guess, opt_.linkMaxShiftPx, opt_.linkMaxPoints, "segment link", &use);
         std::vector<V3> X;
         std::vector<V2> uv;
-        for (std::size_t j = before; j < tracks_.size(); ++j) {
-          X.push_back(points_[static_cast<std::size_t>(tracks_[j].point)].X);
-          uv.push_back(V2(Scalar(tracks_[j].uv(0)), Scalar(tracks_[j].uv(1))));
-        }
-        std::vector<char> drop(tracks_.size(), 0);
-        for (std::size_t j = before; j < tracks_.size(); ++j) drop[j] = 1;
-        removeTracks(drop);
+        foundCorrespondences(before, X, uv);
+        removeTracksFrom(before);
         found = std::max(found, X.size());
         if (static_cast<int>(X.size()) < opt_.linkMinInliers) continue;
         PnPRansacOptions<Scalar> po = opt_.pnp;
@@ -2042,6 +2028,21 @@ class MonoSlam {
   }
 
   /// Removes the flagged tracks (keeping prevUv_ aligned with tracks_).
+  /// The map points and pixels of the tracks from index `before` on (those a searchMapPoints just
+  /// added), for PnP.
+  void foundCorrespondences(std::size_t before, std::vector<V3>& X, std::vector<V2>& uv) const {
+    for (std::size_t i = before; i < tracks_.size(); ++i) {
+      X.push_back(points_[static_cast<std::size_t>(tracks_[i].point)].X);
+      uv.push_back(V2(Scalar(tracks_[i].uv(0)), Scalar(tracks_[i].uv(1))));
+    }
+  }
+  /// Drops the tracks from index `before` on (a search's finds that were not kept).
+  void removeTracksFrom(std::size_t before) {
+    std::vector<char> drop(tracks_.size(), 0);
+    for (std::size_t i = before; i < tracks_.size(); ++i) drop[i] = 1;
+    removeTracks(drop);
+  }
+
   void removeTracks(const std::vector<char>& drop) {
     std::size_t w = 0;
     const bool withPrev = prevUv_.size() == tracks_.size();
