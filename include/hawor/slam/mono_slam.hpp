@@ -960,6 +960,9 @@ class MonoSlam {
       }
       TwoViewOptions<Scalar> tvo = opt_.twoView;
       tvo.seed = opt_.twoView.seed + static_cast<std::uint32_t>(f);
+      // In a fast turn the rotation dwarfs the translation: H (the rotation) is the model, and
+      // E's extra inliers are noise read as parallax (fast_turns seed 8, frame 204).
+      tvo.essentialOverPlane = opt_.twoView.essentialOverPlane && !turning_;
       const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo, x3.empty() ? nullptr : &x3);
       if (opt_.log) {
         opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(bestG) + ", " +
@@ -967,6 +970,7 @@ class MonoSlam {
                  std::to_string(int(tv.status)) + " model " + std::to_string(int(tv.model)) + " inliers " +
                  std::to_string(tv.numInliers) + " triangulated " + std::to_string(tv.numTriangulated) +
                  " parallax " + std::to_string(double(tv.medianParallaxDeg)) +
+                 (tv.essentialOverPlane ? " (E over GRIC's H)" : "") +
                  (tv.thirdViewCandidates > 0 ? ", further views: " +
                                                    std::to_string(tv.thirdViewCandidates) + " candidates, costs " +
                                                    std::to_string(double(tv.thirdViewCost)) + " / " +
