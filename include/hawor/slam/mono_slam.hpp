@@ -2031,7 +2031,6 @@ class MonoSlam {
     removeTracks(drop);
   }
 
-  /// Removes the flagged tracks (keeping prevUv_ aligned with tracks_).
   /// The map points and pixels of the tracks from index `before` on (those a searchMapPoints just
   /// added), for PnP.
   void foundCorrespondences(std::size_t before, std::vector<V3>& X, std::vector<V2>& uv) const {
@@ -2047,6 +2046,7 @@ class MonoSlam {
     removeTracks(drop);
   }
 
+  /// Removes the flagged tracks (keeping prevUv_ aligned with tracks_).
   void removeTracks(const std::vector<char>& drop) {
     std::size_t w = 0;
     const bool withPrev = prevUv_.size() == tracks_.size();

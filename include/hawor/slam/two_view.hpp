@@ -132,8 +132,8 @@ struct TwoViewResult {
   /// Further views: candidates scored (0: none) and the winner's / runner-up's MSAC costs per
   /// observation (px², averaged over the views).
   int thirdViewCandidates = 0;
-  bool essentialOverPlane = false;     ///< GRIC chose H, E taken instead (TwoViewOptions::essentialOverPlane)
   Scalar thirdViewCost = Scalar(0), thirdViewRunnerUp = Scalar(0);
+  bool essentialOverPlane = false;     ///< GRIC chose H, E taken instead (TwoViewOptions::essentialOverPlane)
   bool ok() const { return status == TwoViewStatus::Ok; }
 };
 
