@@ -20,6 +20,15 @@ hawor::Points3<double> toPoints(const hawor_test::RefArray& a) {
   return m;
 }
 
+/// T×9 row-major rotation matrices (numpy's C order).
+std::vector<hawor::Mat3<double>> toRotations(const hawor_test::RefArray& a) {
+  std::vector<hawor::Mat3<double>> out(static_cast<size_t>(a.size() / 9));
+  for (size_t t = 0; t < out.size(); ++t)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out[t](r, c) = a[static_cast<long>(9 * t + 3 * r + c)];
+  return out;
+}
+
 void checkRel(double got, double expect, const char* what) {
   INFO(what << ": got " << got << ", numpy " << expect);
   CHECK(std::abs(got - expect) <= 1e-9 * std::max(1.0, std::abs(expect)));
@@ -71,5 +80,12 @@ TEST_CASE("hand and camera metrics match the numpy reference", "[eval][ref]") {
     const auto parts = hawor::alignCameraParts(gp, ep, 100);
     const auto aligned = hawor::alignJointsByParts(parts, toSeq(ref[k + "_pts"]));
     CHECK((aligned - toSeq(ref[k + "_pts_aligned"])).cwiseAbs().maxCoeff() < 1e-9);
+
+    const auto gR = toRotations(ref[k + "_gR"]);
+    const auto eR = toRotations(ref[k + "_eR"]);
+    const auto re = hawor::rotationErrors(gR, eR);
+    checkRel(re.mean_deg, ref[k + "_rot_mean"][0], (k + " rotation error mean").c_str());
+    checkRel(re.max_deg, ref[k + "_rot_max"][0], (k + " rotation error max").c_str());
+    CHECK((re.align - toRotations(ref[k + "_rot_align"])[0]).cwiseAbs().maxCoeff() < 1e-9);
   }
 }

@@ -1,6 +1,8 @@
 // Unit/property tests of eval/camera_metrics.hpp (native and WASM).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "hawor/eval/eval.hpp"
 
@@ -100,4 +102,43 @@ TEMPLATE_TEST_CASE("per-part rigid camera alignment", "[eval][camera]", float, d
   CHECK_THROWS_AS(a201.forFrame(201), hawor::Error);
   CHECK_THROWS_AS(hawor::alignJointsByParts(a201, joints), hawor::Error);
   CHECK_THROWS_AS(hawor::alignCameraParts(gt, est, 2), hawor::Error);
+}
+
+TEMPLATE_TEST_CASE("camera rotation error after the best global rotation", "[eval][camera]", float, double) {
+  using S = TestType;
+  const S degTol = std::is_same<S, float>::value ? S(2e-3) : S(1e-9);
+  const S rad = S(EIGEN_PI) / S(180);
+  std::vector<hawor::Mat3<S>> gt, est;
+  // Frames in equal pairs (2k, 2k + 1): a head turning 0.1 rad every two frames.
+  for (int t = 0; t < 90; ++t) {
+    const S k = S(t / 2);
+    gt.push_back(hawor::axisAngleToMatrix(hawor::Vec3<S>(S(0.3) * std::sin(k / S(10)), S(0.1) * k, S(0.1))));
+  }
+  // The estimate in another world, A·E_t = G_t: every error 0, and the alignment is A's inverse.
+  const hawor::Mat3<S> W = hawor::axisAngleToMatrix(hawor::Vec3<S>(S(0.7), S(-1.9), S(0.4)));
+  for (const auto& g : gt) est.push_back(W * g);
+  const auto exact = hawor::rotationErrors(gt, est);
+  CHECK(exact.mean_deg < degTol);
+  CHECK(exact.max_deg < degTol);
+  CHECK((exact.align - W.transpose()).cwiseAbs().maxCoeff() < S(10) * degTol);
+  // Errors of +θ and −θ about the camera's y axis on the two frames of each pair: a pair adds
+  // G·(R_y(−θ) + R_y(θ))·Gᵀ·Wᵀ = G·diag(2cos θ, 2, 2cos θ)·Gᵀ·Wᵀ to Σ G_t·E_tᵀ, a symmetric
+  // positive definite matrix times Wᵀ, whose projection onto SO(3) is Wᵀ: each frame is θ off.
+  const S theta = S(4);
+  for (size_t t = 0; t < gt.size(); ++t) {
+    const S a = (t % 2 == 0 ? theta : -theta) * rad;
+    est[t] = W * gt[t] * hawor::axisAngleToMatrix(hawor::Vec3<S>(S(0), a, S(0)));
+  }
+  const auto sym = hawor::rotationErrors(gt, est);
+  CHECK(std::abs(sym.mean_deg - theta) < degTol);
+  CHECK(std::abs(sym.max_deg - theta) < degTol);
+  CHECK((sym.align - W.transpose()).cwiseAbs().maxCoeff() < S(10) * degTol);
+  // One frame turned by 90° more: the max sees it, the alignment barely moves.
+  est[10] = est[10] * hawor::axisAngleToMatrix(hawor::Vec3<S>(S(90) * rad, S(0), S(0)));
+  const auto out = hawor::rotationErrors(gt, est);
+  CHECK(out.max_deg > S(85));
+  CHECK_THROWS_AS(hawor::rotationErrors(gt, std::vector<hawor::Mat3<S>>(gt.begin(), gt.begin() + 5)), hawor::Error);
+  CHECK_THROWS_AS(hawor::rotationErrors(std::vector<hawor::Mat3<S>>{}, std::vector<hawor::Mat3<S>>{}), hawor::Error);
+  est[3](0, 0) = std::numeric_limits<S>::quiet_NaN();
+  CHECK_THROWS_AS(hawor::rotationErrors(gt, est), hawor::Error);
 }

@@ -5,7 +5,8 @@ Hands: T = 250 frames (chunks 100, 100, 50) of 21 joints; the estimate is a rand
 the ground truth plus a drift and per-joint noise, so every metric is non-trivial. Computed with
 all frames valid and with a mask that has gaps (one whole chunk partially missing).
 Cameras: T = 250 and T = 201 positions; per-part rigid alignment with part length 100 (so the
-201-frame case has a 1-frame trailing part, merged into the previous one).
+201-frame case has a 1-frame trailing part, merged into the previous one); camera rotations in a
+rotated world with noise and one outlier frame for the rotation error.
 """
 import os
 import sys
@@ -81,6 +82,19 @@ def main(out):
         cams[tag + "_ate_s"] = M.ate_s(gp, ep)
         cams[tag + "_pts"] = pts.reshape(Tc, 63)
         cams[tag + "_pts_aligned"] = M.apply_part_alignment(Rs, ts, pts).reshape(Tc, 63)
+        # Camera-to-world rotations: a smooth head turn, the estimate in a randomly rotated world
+        # with a per-frame error of a few degrees (and one frame 150 deg off, an outlier).
+        gR = Rotation.from_rotvec(np.stack([0.3 * np.sin(time), 1.2 * np.sin(0.5 * time), 0.1 * time], 1))
+        noise = Rotation.from_rotvec(rng.normal(size=(Tc, 3)) * 0.04)
+        eR = Rotation.random(random_state=int(rng.integers(1 << 30))) * gR * noise
+        eR_m = eR.as_matrix()
+        eR_m[7] = eR_m[7] @ Rotation.from_rotvec([0.0, np.radians(150.0), 0.0]).as_matrix()
+        mean_deg, max_deg, A = M.rotation_errors(gR.as_matrix(), eR_m)
+        cams[tag + "_gR"] = gR.as_matrix().reshape(Tc, 9)
+        cams[tag + "_eR"] = eR_m.reshape(Tc, 9)
+        cams[tag + "_rot_mean"] = mean_deg
+        cams[tag + "_rot_max"] = max_deg
+        cams[tag + "_rot_align"] = A.reshape(1, 9)
 
     refio.save(out, gt_w=gt_w.reshape(T, 63), est_w=est_w.reshape(T, 63),
                gt_c=gt_c.reshape(T, 63), est_c=est_c.reshape(T, 63), valid=valid.astype(float),

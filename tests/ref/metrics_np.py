@@ -178,6 +178,21 @@ def ate_s(gt_pos, est_pos):
     return float(err.mean() * M2MM)
 
 
+def rotation_errors(gt_R, est_R):
+    """Camera rotation error (degrees) after the best global rotation A of the estimate's world.
+
+    A minimises sum |A E_t - G_t|_F^2 = sum |A - G_t E_t^T|_F^2: the chordal L2 mean of the
+    rotations G_t E_t^T, here by scipy's Rotation.mean (Markley's quaternion eigenvector method,
+    not an SVD). Frame t's error is the angle of G_t^T A E_t. Returns (mean, max, A)."""
+    from scipy.spatial.transform import Rotation
+    gt_R = np.asarray(gt_R, dtype=np.float64).reshape(-1, 3, 3)
+    est_R = np.asarray(est_R, dtype=np.float64).reshape(-1, 3, 3)
+    A = Rotation.from_matrix(np.einsum("tij,tkj->tik", gt_R, est_R)).mean().as_matrix()
+    err = Rotation.from_matrix(np.einsum("tji,jk,tkl->til", gt_R, A, est_R)).magnitude()
+    deg = np.degrees(err)
+    return float(deg.mean()), float(deg.max()), A
+
+
 def camera_part_alignment(gt_pos, est_pos, part=CAMERA_PART):
     """Rigid (no scale) alignment of estimated to ground-truth camera positions per `part` frames.
     Returns per-frame (R (T,3,3), t (T,3)) to apply to estimated world points of that frame.

@@ -2,9 +2,11 @@
 // the world hand metrics (DESIGN §8).
 //
 // Camera positions are T×3 (Points3, metres): the camera centres t_c2w of the camera-to-world
-// poses (DESIGN §2). ATE / ATE-S are returned in millimetres. Reference: tests/ref/metrics_np.py.
+// poses (DESIGN §2). ATE / ATE-S are returned in millimetres, rotation errors in degrees.
+// Reference: tests/ref/metrics_np.py.
 #pragma once
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <string>
 #include <vector>
@@ -13,6 +15,7 @@
 #include "hawor/eval/hand_metrics.hpp"
 #include "hawor/eval/joint_sequence.hpp"
 #include "hawor/geometry/alignment.hpp"
+#include "hawor/geometry/rotation.hpp"
 
 namespace hawor {
 
@@ -83,6 +86,47 @@ CameraMetrics<Scalar> evaluateCameras(const Points3<Scalar>& gt, const Points3<S
   m.ate_s = ateSE3(gt, est);
   m.n = gt.rows();
   return m;
+}
+
+/// Camera rotation error after the best global rotation: the estimate's world is rotated by
+/// A = argmin_A Σ‖A·E_t − G_t‖²_F = proj_SO(3)(Σ G_t·E_tᵀ) (chordal L2 mean; Hartley et al. 2013,
+/// "Rotation averaging" §5.3), and e_t = ‖log(G_tᵀ·A·E_t)‖ is frame t's angle. Needs no positions,
+/// so it is defined for rotation-only trajectories (near-pure rotation) where ATE is not.
+template <typename Scalar>
+struct RotationErrors {
+  Scalar mean_deg = Scalar(0);
+  Scalar max_deg = Scalar(0);
+  Mat3<Scalar> align = Mat3<Scalar>::Identity();  ///< A: estimate world → ground-truth world
+};
+
+/// Rotation errors of camera-to-world rotations `est` against `gt` (same length, ≥ 1 frame).
+template <typename Scalar>
+RotationErrors<Scalar> rotationErrors(const std::vector<Mat3<Scalar>>& gt, const std::vector<Mat3<Scalar>>& est) {
+  if (gt.size() != est.size())
+    throw Error("rotationErrors: " + std::to_string(gt.size()) + " ground-truth and " + std::to_string(est.size()) +
+                " estimated rotations");
+  if (gt.empty()) throw Error("rotationErrors: no rotations");
+  Mat3<Scalar> M = Mat3<Scalar>::Zero();
+  for (size_t t = 0; t < gt.size(); ++t) {
+    if (!gt[t].allFinite() || !est[t].allFinite())
+      throw Error("rotationErrors: non-finite rotation at frame " + std::to_string(t));
+    M += gt[t] * est[t].transpose();
+  }
+  // Projection onto SO(3): U·diag(1, 1, det(U·Vᵀ))·Vᵀ.
+  const Eigen::JacobiSVD<Mat3<Scalar>> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Vec3<Scalar> d(Scalar(1), Scalar(1), Scalar(1));
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < Scalar(0)) d(2) = Scalar(-1);
+  RotationErrors<Scalar> r;
+  r.align = svd.matrixU() * d.asDiagonal() * svd.matrixV().transpose();
+  const Scalar toDeg = Scalar(180) / Scalar(EIGEN_PI);
+  Scalar sum(0);
+  for (size_t t = 0; t < gt.size(); ++t) {
+    const Scalar e = matrixToAxisAngle(Mat3<Scalar>(gt[t].transpose() * r.align * est[t])).norm() * toDeg;
+    sum += e;
+    r.max_deg = std::max(r.max_deg, e);
+  }
+  r.mean_deg = sum / Scalar(gt.size());
+  return r;
 }
 
 /// Rigid (SE3, s = 1) alignments of the estimated camera positions onto the ground truth, one per
