@@ -1,6 +1,8 @@
 // bench_slam — the SLAM benchmark of issue 4: every synthetic preset with and without the dual
 // hand masking, one table: ATE (Sim(3)-aligned mean error, metres and % of the ground-truth path
-// length), ms per frame (median, p95), keyframes, losses, frame statuses, hand coverage.
+// length), camera rotation error (degrees, mean and max after the best global rotation; defined
+// also for near-pure rotation, where the positions carry no measurable motion), ms per frame
+// (median, p95), keyframes, losses, frame statuses, hand coverage.
 // Frames are rendered in memory (no PNG round trip) and fed to both SLAM runs in the same loop,
 // so the masked/unmasked comparison sees identical images and machine load.
 //
@@ -74,6 +76,7 @@ struct RunStats {
   std::string preset, mode;
   int frames = 0;
   double ateM = 0, atePct = 0, pathM = 0, msMedian = 0, msP95 = 0, finishMs = 0;
+  double rotMeanDeg = 0, rotMaxDeg = 0;  // camera rotation error after the best global rotation
   int keyframes = 0, losses = 0, resets = 0, tracked = 0, interpolated = 0, lost = 0, relocalised = 0;
   double mb = 0;
   double coverage30 = 0, maxCoverage = 0;
@@ -198,8 +201,8 @@ int main(int argc, char** argv) {
       }
     }
     std::vector<RunStats> all;
-    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %5s %5s %5s %22s %6s %6s %7s\n", "preset", "mode", "frames", "ATE[m]",
-                "ATE[%]", "path[m]", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30", "fin_ms");
+    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %7s %7s %5s %5s %5s %22s %6s %6s %7s\n", "preset", "mode", "frames", "ATE[m]",
+                "ATE[%]", "path[m]", "rot_deg", "rot_max", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30", "fin_ms");
     for (const std::string& name : presets) {
       hawor::synth::SynthOptions so;
       so.width = width;
@@ -297,6 +300,13 @@ int main(int argc, char** argv) {
           for (const auto& g : gt) e += (g - c).norm();
           st.ateM = e / double(gt.size());
         }
+        {
+          std::vector<hawor::Mat3<double>> estR;
+          for (const auto& T : r.poses) estR.push_back(T.rotationMatrix());
+          const hawor::RotationErrors<double> re = hawor::rotationErrors(gtR, estR);
+          st.rotMeanDeg = re.mean_deg;
+          st.rotMaxDeg = re.max_deg;
+        }
         st.pathM = path;
         st.atePct = path > 0 ? 100.0 * st.ateM / path : 0;
         st.msMedian = hawor::percentile(m == 0 ? tm : tu, 0.5);
@@ -314,8 +324,8 @@ int main(int argc, char** argv) {
         st.maxCoverage = maxCov;
         char counts[64];
         std::snprintf(counts, sizeof counts, "%d/%d/%d/%d", st.tracked, st.interpolated, st.lost, st.relocalised);
-        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f %7.0f\n", name.c_str(),
-                    st.mode.c_str(), n, st.ateM, st.atePct, path, st.msMedian, st.msP95, st.keyframes, st.losses,
+        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.1f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f %7.0f\n", name.c_str(),
+                    st.mode.c_str(), n, st.ateM, st.atePct, path, st.rotMeanDeg, st.rotMaxDeg, st.msMedian, st.msP95, st.keyframes, st.losses,
                     st.resets, counts, st.mb, st.coverage30, st.finishMs);
         std::fflush(stdout);
         all.push_back(st);
@@ -330,7 +340,8 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < all.size(); ++i) {
         const RunStats& s = all[i];
         o << "  {\"preset\": \"" << s.preset << "\", \"mode\": \"" << s.mode << "\", \"frames\": " << s.frames
-          << ", \"ate_m\": " << s.ateM << ", \"ate_pct\": " << s.atePct << ", \"path_m\": " << s.pathM
+          << ", \"ate_m\": " << s.ateM << ", \"ate_pct\": " << s.atePct << ", \"path_m\": " << s.pathM << ", \"rot_mean_deg\": " << s.rotMeanDeg
+          << ", \"rot_max_deg\": " << s.rotMaxDeg
           << ", \"ms_median\": " << s.msMedian << ", \"ms_p95\": " << s.msP95 << ", \"finish_ms\": " << s.finishMs
           << ", \"keyframes\": " << s.keyframes << ", \"losses\": " << s.losses << ", \"resets\": " << s.resets
           << ", \"tracked\": " << s.tracked << ", \"interpolated\": " << s.interpolated << ", \"lost\": " << s.lost

@@ -58,7 +58,7 @@ def camera_case(rng, tmp, T, name):
     R = Rotation.random(random_state=rng.integers(1 << 31))
     s = rng.uniform(0.3, 3.0)
     est = s * R.apply(pos) + rng.normal(size=3) + rng.normal(scale=0.01, size=(T, 3))
-    est_rot = R * rot
+    est_rot = R * rot * Rotation.from_rotvec(rng.normal(scale=0.03, size=(T, 3)))
     gt_path, est_path = os.path.join(tmp, name + "_gt.tum"), os.path.join(tmp, name + "_est.tum")
     write_tum(gt_path, t, pos, rot.as_quat())
     write_tum(est_path, t + rng.uniform(-4e-4, 4e-4, T), est, est_rot.as_quat())
@@ -68,7 +68,9 @@ def camera_case(rng, tmp, T, name):
         return
     j = json.loads(out)
     ate_mm, scale = M.ate(pos, est)
-    ref = {"ate": ate_mm / 1000.0, "ate_s": M.ate_s(pos, est) / 1000.0, "scale": scale, "n": T}
+    rot_mean, rot_max, _ = M.rotation_errors(rot.as_matrix(), est_rot.as_matrix())
+    ref = {"ate": ate_mm / 1000.0, "ate_s": M.ate_s(pos, est) / 1000.0, "scale": scale, "n": T,
+           "rot_mean_deg": rot_mean, "rot_max_deg": rot_max}
     for k, v in ref.items():
         check("%s %s" % (name, k), close(j[k], v), "hawor %r numpy %r" % (j[k], v))
 
