@@ -6,7 +6,6 @@
 // Reference: tests/ref/metrics_np.py.
 #pragma once
 
-#include <Eigen/SVD>
 #include <algorithm>
 #include <string>
 #include <vector>
@@ -112,12 +111,8 @@ RotationErrors<Scalar> rotationErrors(const std::vector<Mat3<Scalar>>& gt, const
       throw Error("rotationErrors: non-finite rotation at frame " + std::to_string(t));
     M += gt[t] * est[t].transpose();
   }
-  // Projection onto SO(3): U·diag(1, 1, det(U·Vᵀ))·Vᵀ.
-  const Eigen::JacobiSVD<Mat3<Scalar>> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Vec3<Scalar> d(Scalar(1), Scalar(1), Scalar(1));
-  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < Scalar(0)) d(2) = Scalar(-1);
   RotationErrors<Scalar> r;
-  r.align = svd.matrixU() * d.asDiagonal() * svd.matrixV().transpose();
+  r.align = projectToSO3(M);
   const Scalar toDeg = Scalar(180) / Scalar(EIGEN_PI);
   Scalar sum(0);
   for (size_t t = 0; t < gt.size(); ++t) {
