@@ -12,7 +12,7 @@ is 0) -> sequential_matcher (default overlap, no loop detection) -> mapper (intr
 -> model_converter (largest model to TXT) -> images.txt parsed into camera-to-world poses.
 
 Metrics: Sim(3) Umeyama alignment of the registered camera centres to ground truth; ATE is the
-RMSE of the aligned centres (ate_mean_m: the mean, the library's ATE definition, DESIGN §8),
+RMSE of the aligned centres (ate_mean_m: the mean, the library's ATE definition, docs/design.md §8),
 in metres and in % of the ground-truth path length over all N frames. ate_all_*: the same over
 all N frames after filling every unregistered frame with the nearest registered frame's pose
 (Sim(3) re-fitted over all frames), so frames COLMAP could not register count against it.

@@ -12,7 +12,7 @@
 // Reported: time per fit (median, p95) for cold starts, warm starts from a nearby previous
 // frame (the truth perturbed by 0.05 rad / 1 cm / 0.05 rad per joint) and smooth 30 fps
 // sequences fitted with warm starts; 21-keypoint PA-MPJPE (mm, similarity Procrustes per hand,
-// DESIGN §8) and wrist (root) position error (cm, camera frame), medians; heap allocations per
+// docs/design.md §8) and wrist (root) position error (cm, camera frame), medians; heap allocations per
 // warm fit (constant: the result's arrays only, none per iteration).
 #include <algorithm>
 #include <atomic>

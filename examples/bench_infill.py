@@ -14,7 +14,7 @@ The keypoints of the filled parameters come from the same hand model as the grou
 (`--model default --joints`: the shipped WebXR hands, whose forward pass reproduces the
 generator's joints_world exactly at observed frames; checked). Errors are measured on the CUT
 frames only (the ground truth of out-of-view frames is not used), with the definitions of
-DESIGN section 8 restricted to those frames:
+docs/design.md §8 restricted to those frames:
   W-MPJPE   per 100-frame chunk, similarity (Umeyama with scale) fitted on the chunk's first two
             observed frames (all 21 joints; the world anchor), error of the chunk's cut frames, mm
   WA-MPJPE  per 100-frame chunk, similarity fitted on the chunk's cut frames, their error, mm

@@ -16,7 +16,7 @@
 //   MODE+depth either, with the rendered depth corrupted as in the scale benchmark (per-keyframe
 //              ±5 % bias, 5 % noise, 10 % outliers) as the metric-depth network.
 // --mode takes a list, e.g. network,simulated,network+depth,simulated+depth.
-// Metrics (DESIGN §8, the core's evaluateHands / evaluateCameras), per hand on the frames where
+// Metrics (docs/design.md §8, the core's evaluateHands / evaluateCameras), per hand on the frames where
 // the hand is in view and was observed, then the mean of the two hands: PA-MPJPE, W-MPJPE,
 // WA-MPJPE (mm), RTE (%), Accel (m/s²); camera: ATE and ATE-S (mm, Sim(3) / SE(3) alignment);
 // found = observed / in-view frames; swaps = observed frames whose wrist is nearer the other

@@ -23,7 +23,7 @@ repeated for --repeats independent draws of the corruption:
                 depth; only where the hand is valid.
 Scale error: |alpha / alpha_true - 1| with alpha_true the Sim(3) scale of the SLAM trajectory onto
 the ground truth (the per-preset figure is the median over the draws). ATE-S: the mean error of the
-scaled trajectory after a rigid (SE(3)) alignment, next to the Sim(3) ATE (DESIGN section 8).
+scaled trajectory after a rigid (SE(3)) alignment, next to the Sim(3) ATE (docs/design.md §8).
 Presets whose camera path is under 0.1 m (pure_rotation) have no observable trajectory scale, and
 a SLAM trajectory whose ATE exceeds 5 % of the path has no single scale (fast_turns): both are
 listed apart; the hand-anchored figure is over presets with >= 0.5 m of camera path (issue 5).

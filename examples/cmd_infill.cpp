@@ -27,7 +27,7 @@ const char* kInfillHelp =
     "                    [--weights W.npz] [--threads N] [--smooth] [--model FILE|default] [--joints]\n"
     "\n"
     "Fills the frames where a hand was not observed, per hand, in the hand's canonical space\n"
-    "(DESIGN section 7). HANDS.npz holds, per hand (key prefix left_ and/or right_), the world-space\n"
+    "(docs/design.md section 7). HANDS.npz holds, per hand (key prefix left_ and/or right_), the world-space\n"
     "keys of the original output:\n"
     "  trans      (T,3)    MANO translation, metres\n"
     "  rot        (T,3)    global orientation, axis-angle, radians\n"
@@ -40,7 +40,7 @@ const char* kInfillHelp =
     "  --method M     spline (default): the data-free cubic Hermite / SO(3) spline with boundary\n"
     "                 velocities from the visible frames; lerp: LERP/SLERP (the paper's baseline);\n"
     "                 last: repeat the last observed frame; transformer: the original infiller\n"
-    "                 network (DESIGN section 7) with --weights: both hands in 120-frame canonical\n"
+    "                 network (docs/design.md section 7) with --weights: both hands in 120-frame canonical\n"
     "                 windows, LERP/SLERP pre-fill, the network's output at the missing frames;\n"
     "                 MANO hands only (15 joint rotations, 10 betas); give --model for the exact\n"
     "                 canonical frame, as the network is not invariant to rigid motions\n"
@@ -51,7 +51,7 @@ const char* kInfillHelp =
     "                 for bit\n"
     "  --model M      a hand model (as for 'hawor hand'; FILE is mirrored for the other side,\n"
     "                 'default' = the shipped WebXR hands): joint 0 of the shaped rest hand (J0)\n"
-    "                 then places the canonical frame exactly (DESIGN section 3); without it J0 = 0,\n"
+    "                 then places the canonical frame exactly (docs/design.md section 3); without it J0 = 0,\n"
     "                 which changes nothing for last/lerp/spline (they commute with rigid motions)\n"
     "  --joints       also write <prefix>joints_world (T,K,3), the model's keypoints of the output\n"
     "                 parameters (needs --model; NaN where a frame stays unfilled)\n"
@@ -265,7 +265,7 @@ int cmdInfill(int argc, char** argv) {
 
   std::array<hawor::InfillResult<double>, 2> result;
   if (transformer) {
-    // Both hands in one window (DESIGN 7); an absent hand enters as never observed.
+    // Both hands in one window (docs/design.md §7); an absent hand enters as never observed.
     const size_t have = hands[0].present ? 0 : 1;
     for (size_t s = 0; s < 2; ++s) {
       if (hands[s].present) continue;

@@ -1,4 +1,4 @@
-// hawor metrics camera|hands — the standard metrics (DESIGN §8) of files on disk.
+// hawor metrics camera|hands — the standard metrics (docs/design.md §8) of files on disk.
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -82,7 +82,7 @@ int metricsCamera(int argc, char** argv) {
   }
   const auto m = hawor::evaluateCameras(g, e);
   const auto r = hawor::rotationErrors(gR, eR);
-  // The library reports millimetres (DESIGN §8 tables); this command's contract is metres.
+  // The library reports millimetres (docs/design.md §8 tables); this command's contract is metres.
   std::printf("%s\n", JsonObject()
                           .num("ate", m.ate / hawor::kMetresToMm)
                           .num("ate_s", m.ate_s / hawor::kMetresToMm)

@@ -43,7 +43,7 @@ const char* kScaleHelp =
     "  --eye-height M         camera height above the floor (default 1.6: a standing adult's\n"
     "                         head-worn camera; about 1.2 sitting)\n"
     "  --sampling S           AdaSM's re-selection window on the metric depth and the scaled SLAM\n"
-    "                         depth ('official', DESIGN 6) or on the scaled SLAM depth only\n"
+    "                         depth ('official', docs/design.md section 6) or on the scaled SLAM depth only\n"
     "                         plus a +-25 % gate about it ('slam-depth', default: no truncation\n"
     "                         bias with sparse depths; windows widened to 30 points, not 10)\n"
     "  --combine C            the keyframes' scales into one: 'huber' (default: Huber estimate of\n"

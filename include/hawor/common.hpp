@@ -1,6 +1,6 @@
 // hawor/common.hpp — constants, tolerances and the error type shared by every module.
 //
-// Conventions (DESIGN §2): metres, seconds, radians; OpenCV camera frame (x right, y down,
+// Conventions (docs/design.md §2): metres, seconds, radians; OpenCV camera frame (x right, y down,
 // z forward); poses stored camera-to-world; quaternions are Eigen's (w, x, y, z).
 // Nothing here assumes 16-byte alignment: every fixed-size Eigen member in the library is
 // declared with Eigen::DontAlign or lives on the stack (WASM has no static alignment).

@@ -7,7 +7,7 @@
 //           kernels, about 70 GFLOP/s float on one AVX-512 core).
 //   Packed  a register-blocked kernel in 16-byte vectors (GCC/Clang vector extensions) over B
 //           packed once into column panels: the WebAssembly default. Eigen has no wasm SIMD
-//           backend (DESIGN §9) and its scalar GEMM runs there at ~3 GFLOP/s; this kernel keeps
+//           backend (docs/design.md §9) and its scalar GEMM runs there at ~3 GFLOP/s; this kernel keeps
 //           a 4×8 (float) / 4×4 (double) tile of C in 8 vector registers and streams
 //           contiguous panels of A and B, which -msimd128 turns into v128 loads, f32x4/f64x2
 //           multiplies and adds. Natively it is what the tests compare against Eigen.

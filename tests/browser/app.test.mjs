@@ -1,5 +1,5 @@
 // End-to-end tests of the browser app in headless Chromium (npm playwright-core driving Debian's
-// /usr/bin/chromium, DESIGN §9): page load and cross-origin isolation, the error messages (corrupt
+// /usr/bin/chromium, docs/design.md §9): page load and cross-origin isolation, the error messages (corrupt
 // file, huge resolution, clip too short, wrong MANO file), cancel, the synthetic sample and the
 // real clip (../shared/data/egocentric_kitchen.mp4, its first HAWOR_KITCHEN_FRAMES frames, default
 // 40, at 640 px; skipped with a message when absent) through the file input, the 3D scene, every

@@ -1,6 +1,6 @@
 """`hawor slam` end to end: a short synthetic sequence from `hawor synth` through the SLAM with and
 without masks; the trajectory against the ground truth (Sim(3) Umeyama written here in numpy,
-mean error as in DESIGN section 8), the TUM layout (first pose the identity, timestamps frame/fps),
+mean error as in docs/design.md §8), the TUM layout (first pose the identity, timestamps frame/fps),
 the keyframe-depth npz against the rendered depth maps (up to the same Sim(3) scale), the stats
 JSON, --refine-focal from a wrong and a right guess; and bad input: a missing folder, too few frames, a corrupt image, frames of different sizes,
 a mask of the wrong size, bad intrinsics (clear message, exit code 1 or 2, no crash).

@@ -171,7 +171,7 @@ def layout_and_consistency(d, summary, model_joints):
             jw, jc = z[p + "joints_world"][i], z[p + "joints_cam"][i]
             # joints_cam = R_cw (joints_world - t_wc) with the TUM pose.
             check("joints_cam %s %d" % (side, i), np.allclose((jw - t) @ R, jc, atol=1e-7), np.abs((jw - t) @ R - jc).max())
-            # MANO rotates about J0: the camera translation follows the rule of DESIGN §3.
+            # MANO rotates about J0: the camera translation follows the rule of docs/design.md §3.
             uv = np.stack([fx * jc[:, 0] / jc[:, 2] + cx, fy * jc[:, 1] / jc[:, 2] + cy], 1)
             inside = (jc[:, 2] > 0.01) & (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5) & (uv[:, 0] <= W - 0.5) & (uv[:, 1] <= H - 0.5)
             check("kp_in_image %s %d" % (side, i), (inside == z[p + "kp_in_image"][i]).all())

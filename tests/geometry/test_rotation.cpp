@@ -140,7 +140,7 @@ TEMPLATE_TEST_CASE("rot6d layout, round trip and Gram-Schmidt", "[geometry][rota
   for (int i = 0; i < 20; ++i) {
     const Mat3<S> R = axisAngleToMatrix(Vec3<S>(rng.rotvec().cast<S>()));
     const Vec6<S> r = matrixToRot6d(R);
-    // DESIGN §2: [R00, R01, R10, R11, R20, R21].
+    // docs/design.md §2: [R00, R01, R10, R11, R20, R21].
     CHECK(r(0) == R(0, 0));
     CHECK(r(1) == R(0, 1));
     CHECK(r(2) == R(1, 0));

@@ -1,7 +1,7 @@
 // Skinned glTF -> HandModel (hand/default_hand.hpp): the synthetic finger and a WebXR-named
 // skeleton built by an independent writer, glTF skinning semantics reproduced by the forward
 // pass, errors for unusable skins, and the real WebXR generic hands when present
-// (node_modules/@webxr-input-profiles/assets, see DESIGN §3).
+// (node_modules/@webxr-input-profiles/assets, see docs/design.md §3).
 #include <catch2/catch.hpp>
 
 #include <cstdio>

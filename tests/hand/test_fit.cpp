@@ -187,7 +187,7 @@ TEST_CASE("hand fit: noisy data with default options stays accurate", "[hand][fi
     const HandObservation<double> obs = fit_test::observe(m, truth, cam, rng, 1.5, 0.005);
     const HandFitResult<double> r = fitter.fit(obs, cam, opt);
     const HandOutput<double> gt = forward(m, truth);
-    // PA-MPJPE (similarity-aligned, DESIGN §8) and the wrist's camera-frame error.
+    // PA-MPJPE (similarity-aligned, docs/design.md §8) and the wrist's camera-frame error.
     const Points3<double> aligned = umeyama(r.keypoints, gt.keypoints, true).apply(r.keypoints);
     const double pa = (aligned - gt.keypoints).rowwise().norm().mean();
     const double rootErr = (r.keypoints.row(0) - gt.keypoints.row(0)).norm();

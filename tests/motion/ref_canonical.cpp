@@ -1,4 +1,4 @@
-// Cross-check of motion/canonical.hpp against a numpy implementation of DESIGN §3/§7
+// Cross-check of motion/canonical.hpp against a numpy implementation of docs/design.md §3/§7
 // (tests/ref/motion_canonical.py).
 #include <catch2/catch.hpp>
 

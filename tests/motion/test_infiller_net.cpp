@@ -1,6 +1,6 @@
 // Unit/property tests of hawor/matmul.hpp, motion/infiller_weights.hpp and
 // motion/infiller_net.hpp (native and WASM): the packed kernel against plain loops, the network
-// against a naive implementation written here from DESIGN §7 / the official model, the
+// against a naive implementation written here from docs/design.md §7 / the official model, the
 // attention mask, the positional table, and the weight loader's errors. (The comparison with
 // onnxruntime on the official sizes is ref_infiller_net.cpp.)
 #include <catch2/catch.hpp>
@@ -61,7 +61,7 @@ hawor::Npz reread(const hawor::Npz& npz) {
   return hawor::Npz::fromBuffer(npz.toBuffer(), "weights.npz");
 }
 
-// ---- the naive reference (double, plain loops, written from DESIGN §7 / the official model)
+// ---- the naive reference (double, plain loops, written from docs/design.md §7 / the official model)
 
 MatD refLinear(const MatD& X, const MatD& W, const hawor::VecX<double>& b) {
   MatD Y(X.rows(), W.rows());

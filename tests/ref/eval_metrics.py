@@ -1,5 +1,5 @@
 """Driver of the metric cross-check (tests/eval/ref_metrics.cpp): random inputs + expected values
-from metrics_np (numpy, written from DESIGN §8 independently of the C++ library).
+from metrics_np (numpy, written from docs/design.md §8 independently of the C++ library).
 
 Hands: T = 250 frames (chunks 100, 100, 50) of 21 joints; the estimate is a random similarity of
 the ground truth plus a drift and per-joint noise, so every metric is non-trivial. Computed with

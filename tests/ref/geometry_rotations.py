@@ -4,7 +4,7 @@ Usage: geometry_rotations.py <out.txt>
 
 Inputs are generated here with a fixed seed; expected outputs come from independent sources:
   - scipy.spatial.transform.Rotation (from_rotvec, as_matrix, as_quat, from_matrix, as_rotvec),
-  - numpy Gram-Schmidt for rot6d (DESIGN §2 layout [R00, R01, R10, R11, R20, R21]),
+  - numpy Gram-Schmidt for rot6d (docs/design.md §2 layout [R00, R01, R10, R11, R20, R21]),
   - Umeyama alignment: rotation from scipy's Rotation.align_vectors (weighted Kabsch), scale and
     translation from the closed forms given that rotation; cross-checked in this script against
     a numpy SVD implementation written from the paper,

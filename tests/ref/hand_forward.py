@@ -1,4 +1,4 @@
-"""Independent numpy implementation of the MANO forward pass (DESIGN §3: `lbs` + `lrotmin`, full
+"""Independent numpy implementation of the MANO forward pass (docs/design.md §3: `lbs` + `lrotmin`, full
 axis-angle pose, no PCA, no hands_mean), evaluated on the synthetic models of hand_make_mano.py.
 
     /usr/bin/python3 hand_forward.py <out.txt> <dir>

@@ -1,4 +1,4 @@
-"""Writes SYNTHETIC MANO model files with the structure of the official ones (DESIGN §3).
+"""Writes SYNTHETIC MANO model files with the structure of the official ones (docs/design.md §3).
 
 The real MANO_RIGHT.pkl / MANO_LEFT.pkl are licence-restricted, so the tests use random but
 well-formed stand-ins: the same keys, shapes, dtypes and Python object layout (numpy arrays via

@@ -1,4 +1,4 @@
-"""Reference implementation (numpy) of the evaluation metrics of DESIGN §8.
+"""Reference implementation (numpy) of the evaluation metrics of docs/design.md §8.
 
 Written from the definitions, independently of include/hawor/eval; used by the C++ cross-check
 (tests/ref/eval_metrics.py) and by CLI tests. Import with tests/ref on sys.path:

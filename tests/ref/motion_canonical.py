@@ -1,4 +1,4 @@
-"""Reference for motion/canonical.hpp: camera -> world -> canonical (DESIGN §3, §7), numpy/scipy.
+"""Reference for motion/canonical.hpp: camera -> world -> canonical (docs/design.md §3, §7), numpy/scipy.
 
 MANO rotates about joint 0, so a rigid move (R, p) of a hand acts on its root joint:
   root = trans + J0,  R_hand' = R R_hand,  root' = R root + p,  trans' = root' - J0.

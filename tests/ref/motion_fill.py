@@ -1,6 +1,6 @@
 """Reference for motion/sequence.hpp and motion/prefill.hpp: gap filling with a validity mask.
 
-Rules (DESIGN §7 pre-fill and the paper's last-pose baseline), implemented here with numpy and
+Rules (docs/design.md §7 pre-fill and the paper's last-pose baseline), implemented here with numpy and
 scipy's Slerp independently of the C++ code:
   linear     interior gap between valid a < b: x_t = x_a + (t-a)/(b-a) (x_b - x_a)
   rotations  the same fraction, scipy Slerp per axis-angle triple

@@ -18,7 +18,7 @@ import { fileURLToPath, pathToFileURL } from 'node:url';
 const [modulePath, python, nativeDir] = process.argv.slice(2);
 const here = path.dirname(fileURLToPath(import.meta.url));
 const repo = path.resolve(here, '..', '..');
-// Emscripten's EXPORT_ES6 output reads require/__dirname in node (DESIGN §9).
+// Emscripten's EXPORT_ES6 output reads require/__dirname in node (docs/design.md §9).
 globalThis.require = createRequire(import.meta.url);
 globalThis.__dirname = path.dirname(path.resolve(modulePath));
 const { default: createHaworCore } = await import(pathToFileURL(path.resolve(modulePath)).href);

@@ -26,7 +26,7 @@ const parsed = Object.fromEntries(MODEL_NAMES.map((n) => [n, readTflite(models[n
 test('the palm detectors lie at the documented byte ranges of the packed assets and are TFLite files', () => {
   const ranges = packedRanges(readFileSync(join(defaultPackageDir, 'hands_solution_packed_assets_loader.js'), 'utf8'));
   const byName = Object.fromEntries(ranges.map((r) => [r.filename.split('/').pop(), [r.start, r.end]]));
-  // DESIGN §4's numbers for @mediapipe/hands@0.4.1675469240
+  // docs/design.md §4's numbers for @mediapipe/hands@0.4.1675469240
   assert.deepEqual(byName['handedness.txt'], [0, 11]);
   assert.deepEqual(byName['palm_detection_full.tflite'], [11, 2341291]);
   assert.deepEqual(byName['palm_detection_lite.tflite'], [2341291, 4326731]);

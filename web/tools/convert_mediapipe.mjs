@@ -7,7 +7,7 @@
 // The hand landmark models ship as files; the palm detectors are packed into
 // hands_solution_packed_assets.data, whose loader script lists each file's byte range. The
 // ranges are read from the loader and each slice must start like a TFLite FlatBuffer ("TFL3"
-// at byte 4); for the pinned version they are (DESIGN §4): handedness.txt 0..11,
+// at byte 4); for the pinned version they are (docs/design.md §4): handedness.txt 0..11,
 // palm_detection_full 11..2,341,291, palm_detection_lite 2,341,291..4,326,731.
 // Writes <out>/{palm_detection_full,palm_detection_lite,hand_landmark_full,hand_landmark_lite}.onnx
 // and <out>/mediapipe_models.json (source version, SHA-256 of each .tflite, inputs, outputs).

@@ -1,5 +1,5 @@
 #!/usr/bin/env node
-// make_infiller_model.mjs: the HaWoR infiller network (DESIGN §7; the C++ forward pass is
+// make_infiller_model.mjs: the HaWoR infiller network (docs/design.md §7; the C++ forward pass is
 // include/hawor/motion/infiller_net.hpp) as an ONNX model with RANDOM weights, and the same
 // weights as the .npz the C++ loader reads, so the two runtimes can be compared. No trained
 // weights exist here; this is a test fixture, not a model.

@@ -1,8 +1,8 @@
 // hawor/eval/camera_metrics.hpp — camera trajectory metrics and the camera alignment used before
-// the world hand metrics (DESIGN §8).
+// the world hand metrics (docs/design.md §8).
 //
 // Camera positions are T×3 (Points3, metres): the camera centres t_c2w of the camera-to-world
-// poses (DESIGN §2). ATE / ATE-S are returned in millimetres, rotation errors in degrees.
+// poses (docs/design.md §2). ATE / ATE-S are returned in millimetres, rotation errors in degrees.
 // Reference: tests/ref/metrics_np.py.
 #pragma once
 
@@ -142,7 +142,7 @@ struct PartAlignment {
   }
 };
 
-/// Fits the per-part rigid camera alignment used before the world metrics (DESIGN §8).
+/// Fits the per-part rigid camera alignment used before the world metrics (docs/design.md §8).
 template <typename Scalar>
 PartAlignment<Scalar> alignCameraParts(const Points3<Scalar>& gt, const Points3<Scalar>& est,
                                        Eigen::Index part_length = kCameraAlignPart) {

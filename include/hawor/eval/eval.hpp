@@ -1,5 +1,5 @@
 // hawor/eval/eval.hpp — umbrella header of the evaluation module: the hand and camera metrics of
-// the paper (DESIGN §8) and the camera alignment used before the world metrics.
+// the paper (docs/design.md §8) and the camera alignment used before the world metrics.
 #pragma once
 
 #include "hawor/eval/camera_metrics.hpp"

@@ -1,4 +1,4 @@
-// hawor/eval/hand_metrics.hpp — hand pose metrics of the paper (DESIGN §8, official choices).
+// hawor/eval/hand_metrics.hpp — hand pose metrics of the paper (docs/design.md §8, official choices).
 //
 // Inputs are joint sequences (eval/joint_sequence.hpp): T×3J row-major, metres, J = 21 keypoints.
 // Lengths are returned in millimetres, RTE in percent, Accel in m/s², AUC in [0, 1].
@@ -167,7 +167,7 @@ Scalar aucFromErrors(const Sequence<Scalar>& err, Scalar lo = Scalar(0), Scalar 
   return area / (hi - lo);
 }
 
-/// AUC of the PA-aligned joint errors over 0–50 mm in 100 steps (DESIGN §8).
+/// AUC of the PA-aligned joint errors over 0–50 mm in 100 steps (docs/design.md §8).
 template <typename Scalar>
 Scalar aucPck(const JointSequence<Scalar>& gt, const JointSequence<Scalar>& est,
               const ValidMask& valid = {}) {
@@ -244,7 +244,7 @@ Scalar accelError(const JointSequence<Scalar>& gt, const JointSequence<Scalar>& 
   return sum / Scalar(count) * fps * fps;
 }
 
-/// Every hand metric of DESIGN §8 for one hand sequence.
+/// Every hand metric of docs/design.md §8 for one hand sequence.
 ///   gt_world, est_world  world joints; the estimate already aligned per camera part
 ///                        (alignJointsByParts, eval/camera_metrics.hpp) when it comes from an
 ///                        estimated camera. W-MPJPE, WA-MPJPE, RTE and Accel use these.

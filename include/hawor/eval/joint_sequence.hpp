@@ -1,7 +1,7 @@
 // hawor/eval/joint_sequence.hpp — joint tracks as the metrics take them.
 //
 // A joint sequence is a T×3J row-major matrix: frame t's row is (x0, y0, z0, x1, ...), the exact
-// memory of a numpy (T, J, 3) C-order array (J = 21 hand keypoints, DESIGN §3). Consecutive
+// memory of a numpy (T, J, 3) C-order array (J = 21 hand keypoints, docs/design.md §3). Consecutive
 // frames are contiguous, so a block of frames is viewed as an (n·J)×3 point set without copying.
 // Units: metres.
 #pragma once

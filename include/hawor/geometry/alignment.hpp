@@ -2,7 +2,7 @@
 // (Umeyama 1991, "Least-squares estimation of transformation parameters between two point
 // patterns"), optionally weighted.
 //
-// Used by the metrics (DESIGN §8): PA-MPJPE (similarity per frame), W-/WA-MPJPE (similarity
+// Used by the metrics (docs/design.md §8): PA-MPJPE (similarity per frame), W-/WA-MPJPE (similarity
 // on a chunk), RTE and ATE-S (rigid, no scale), ATE (similarity). Pure functions, thread-safe.
 #pragma once
 

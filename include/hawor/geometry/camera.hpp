@@ -1,6 +1,6 @@
 // hawor/geometry/camera.hpp — the pinhole camera model (no distortion).
 //
-// Frames and pixels (DESIGN §2): OpenCV camera frame (x right, y down, z forward); pixel
+// Frames and pixels (docs/design.md §2): OpenCV camera frame (x right, y down, z forward); pixel
 // centres at integer coordinates, so the image covers [−0.5, width − 0.5] × [−0.5, height − 0.5]
 // and the image centre is ((width − 1)/2, (height − 1)/2).
 //   project:   u = fx·x/z + cx,  v = fy·y/z + cy
@@ -89,7 +89,7 @@ struct PinholeCamera {
 
   /// Square pixels, focal length from a field of view measured on the image diagonal:
   /// f = (√(w² + h²)/2) / tan(fov/2); principal point at the image centre ((w−1)/2, (h−1)/2).
-  /// (DESIGN §5: a better default than the official fixed 600 px.)
+  /// (docs/design.md §5: a better default than the official fixed 600 px.)
   static PinholeCamera fromFov(int width, int height, Scalar diagonal_fov_deg) {
     if (width <= 0 || height <= 0) {
       throw Error("PinholeCamera::fromFov: image size must be positive, got " +

@@ -5,7 +5,7 @@
 // t outside [0, 1] extrapolates along the same geodesic. For SO(3) this is SLERP on the short
 // arc (log returns an angle in [0, π]); it stays exact near identical rotations because exp/log
 // use Taylor branches there. For SE(3) the path is the screw motion (not LERP of translation:
-// the motion module's pre-fill does its own SLERP + LERP, DESIGN §7).
+// the motion module's pre-fill does its own SLERP + LERP, docs/design.md §7).
 #pragma once
 
 #include <type_traits>

@@ -2,7 +2,7 @@
 // of METRIC 3D points X_i (metres, any origin) from their pixels u_i, p_i = R·X_i + t.
 //
 // Because X is metric, t is metric too: the depth comes from the known size of the point set
-// (for the hands, the MediaPipe world landmarks, DESIGN §4). Two stages:
+// (for the hands, the MediaPipe world landmarks, docs/design.md §4). Two stages:
 //   1. pnpTranslationLinear: t for a fixed R in closed form. With the normalised pixel
 //      (x̂, ŷ) = ((u − cx)/fx, (v − cy)/fy) and a = R·X, the projection equations
 //      a_x + t_x = x̂ (a_z + t_z),  a_y + t_y = ŷ (a_z + t_z) are linear in t: a 3×3 weighted
@@ -10,7 +10,7 @@
 //   2. solvePnPMetric: Gauss–Newton on the pixel error Σ_i c_i ρ(‖π(R X_i + t) − u_i‖²/σ²)
 //      over t, and over R when asked (left increment R ← exp(δ)·R, d p/dδ = −[R X]×), with IRLS
 //      weights of a robust loss so that a few wrong pixels do not move the pose.
-// Pixels follow DESIGN §2 (OpenCV camera, pixel centres at integers). Pure functions, thread-safe.
+// Pixels follow docs/design.md §2 (OpenCV camera, pixel centres at integers). Pure functions, thread-safe.
 #pragma once
 
 #include <Eigen/Cholesky>

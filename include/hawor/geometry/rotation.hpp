@@ -1,8 +1,8 @@
 // hawor/geometry/rotation.hpp — conversions between rotation representations.
 //
 // Axis-angle (rotation vector) w = θ·axis, 3x3 rotation matrices, unit quaternions (Eigen's
-// (w, x, y, z), DESIGN §2) and rot6d (first two columns of R flattened row-major,
-// [R00, R01, R10, R11, R20, R21], DESIGN §2 *official*). Every function is stable near θ = 0
+// (w, x, y, z), docs/design.md §2) and rot6d (first two columns of R flattened row-major,
+// [R00, R01, R10, R11, R20, R21], docs/design.md §2 *official*). Every function is stable near θ = 0
 // (Taylor branches) and near θ = π (the matrix → axis-angle path goes through a quaternion and
 // atan2, never acos of the trace). Pure functions: thread-safe, no allocation.
 #pragma once
@@ -283,7 +283,7 @@ Vec3<typename Derived::Scalar> matrixToAxisAngle(const Eigen::MatrixBase<Derived
 }
 
 /// rot6d of R: its first two columns flattened row-major, [R00, R01, R10, R11, R20, R21]
-/// (DESIGN §2, the official layout).
+/// (docs/design.md §2, the official layout).
 template <typename Derived>
 Vec6<typename Derived::Scalar> matrixToRot6d(const Eigen::MatrixBase<Derived>& m) {
   EIGEN_STATIC_ASSERT_MATRIX_SPECIFIC_SIZE(Derived, 3, 3);

@@ -2,7 +2,7 @@
 // "State Estimation for Robotics", §7.1).
 //
 // T = (R, t) acts as p ↦ R·p + t. Poses are camera-to-world unless a name says otherwise
-// (DESIGN §2): T_w_c maps camera points to world points.
+// (docs/design.md §2): T_w_c maps camera points to world points.
 // Tangent ξ = (ρ, φ) ∈ R⁶: ρ (translation part) first, φ (rotation vector) second — Sophus'
 // order. exp(ξ) = (exp(φ), J_l(φ)·ρ).
 // Perturbations: left T ⊕ δ = exp(δ)·T, right T ⊕ δ = T·exp(δ); J_l/J_r as in so3.hpp

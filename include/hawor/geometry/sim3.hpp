@@ -1,6 +1,6 @@
 // hawor/geometry/sim3.hpp — similarity transforms Sim(3): p ↦ s·R·p + t, s > 0.
 //
-// Used for up-to-scale SLAM trajectories and Umeyama alignment with scale (DESIGN §6, §8).
+// Used for up-to-scale SLAM trajectories and Umeyama alignment with scale (docs/design.md §6, §8).
 // Storage: scale s, SO3 R, translation t (4x4 form [sR t; 0 1]).
 // Tangent ξ = (ρ, φ, σ) ∈ R⁷: translation part, rotation vector, log-scale (s = e^σ).
 // Lie algebra ξ^ = [φ^ + σI, ρ; 0 0]; exp(ξ) = (e^σ, exp(φ), W(σ, φ)·ρ) with

@@ -1,5 +1,5 @@
 // hawor/hand/default_hand.hpp — a HandModel from a skinned glTF hand: the licence-free default
-// hand (DESIGN §3: npm `@webxr-input-profiles/assets`, MIT, dist/profiles/generic-hand/
+// hand (docs/design.md §3: npm `@webxr-input-profiles/assets`, MIT, dist/profiles/generic-hand/
 // {left,right}.glb: 1,360 vertices, 2,314 triangles, 25 joints named after the WebXR hand joints,
 // linear blend skinning, no shape space, no pose correctives) or any similar skinned mesh.
 //

@@ -1,6 +1,6 @@
 // hawor/hand/fit.hpp — per-frame fit of a hand model (pose, shape, global rotation and METRIC
 // camera-space translation) to 2D keypoints (pixels) and metric 3D keypoints (the MediaPipe
-// landmark network's outputs, DESIGN §4), by Levenberg–Marquardt with analytic Jacobians.
+// landmark network's outputs, docs/design.md §4), by Levenberg–Marquardt with analytic Jacobians.
 //
 // Energy (every residual divided by its noise scale σ, so each term is in "σ² units"):
 //   E = w2d Σ_k c_k ρ(‖π(K_k) − u_k‖²/σ_px²)                            2D keypoints, robust ρ
@@ -58,7 +58,7 @@ namespace hawor {
 /// One hand's detections in one frame. K = the model's keypoint count (21 in MediaPipe order).
 template <typename Scalar>
 struct HandObservation {
-  Pixels<Scalar> keypoints2d;   ///< (K,2) pixels (DESIGN §2)
+  Pixels<Scalar> keypoints2d;   ///< (K,2) pixels (docs/design.md §2)
   VecX<Scalar> confidence2d;    ///< (K) in [0,1]; empty = all 1; 0 = not used
   Points3<Scalar> keypoints3d;  ///< (K,3) metres, camera-aligned axes, any origin; may be empty
   VecX<Scalar> confidence3d;    ///< (K) in [0,1]; empty = all 1; 0 = not used
@@ -98,7 +98,7 @@ struct HandFitOptions {
 
 template <typename Scalar>
 struct HandFitResult {
-  HandPose<Scalar> pose;         ///< camera-frame pose (transl in metres, DESIGN §3 convention)
+  HandPose<Scalar> pose;         ///< camera-frame pose (transl in metres, docs/design.md §3 convention)
   Points3<Scalar> keypoints;     ///< (K,3) fitted keypoints, camera frame, metres
   Scalar cost = Scalar(0);       ///< final energy E
   int iterations = 0;            ///< LM iterations (of the fit that was kept)

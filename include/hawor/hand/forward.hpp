@@ -1,5 +1,5 @@
 // hawor/hand/forward.hpp — the MANO forward pass: shape blend, joint regression, pose correctives,
-// forward kinematics and linear blend skinning (DESIGN §3; the `lbs` / `lrotmin` model of the
+// forward kinematics and linear blend skinning (docs/design.md §3; the `lbs` / `lrotmin` model of the
 // official MANO files, full axis-angle pose, NO PCA and NO hands_mean).
 //
 //   v_shaped = T + S·β                                  (3V)
@@ -11,7 +11,7 @@
 //   joints_j = translation of G_j + transl;  keypoints = joints ∪ tip vertices (HandModel map)
 //
 // The rotation happens about joint 0 (the wrist), so transl is not the wrist position:
-// wrist = J_0(β) + transl (DESIGN §3 "MANO rotates about joint 0").
+// wrist = J_0(β) + transl (docs/design.md §3 "MANO rotates about joint 0").
 //
 // Repeated calls with one HandWorkspace and one HandOutput do not allocate once their sizes are
 // set (Eigen's matrix–vector product uses the caller's buffers). shapeHand() and poseHand() split

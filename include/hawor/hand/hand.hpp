@@ -1,4 +1,4 @@
-// hawor/hand/hand.hpp — the hand-model module (DESIGN §3): model data and forward pass, the
+// hawor/hand/hand.hpp — the hand-model module (docs/design.md §3): model data and forward pass, the
 // left/right mirror convention, model files (MANO .pkl/.npz through a non-executing pickle
 // reader, the WebXR glTF default hand, the library's own .npz), and the keypoint fit.
 #pragma once

@@ -1,7 +1,7 @@
 // hawor/hand/hand_model.hpp — the data of a MANO-style skinned hand model.
 //
 // Generic in the number of joints J and vertices V (MANO: J = 16, V = 778, B = 10 shape
-// coefficients, 135 = 9·15 pose features, DESIGN §3). Units: metres, in the model's own frame.
+// coefficients, 135 = 9·15 pose features, docs/design.md §3). Units: metres, in the model's own frame.
 // Layout follows the numpy arrays of the MANO files: a vertex-major flattening v·3 + c for every
 // per-vertex quantity, so that `shapedirs` is the (V,3,B) array reshaped to (3V, B) and
 // `posedirs` the (V,3,9(J−1)) array reshaped to (3V, 9(J−1)).
@@ -26,11 +26,11 @@ namespace hawor {
 /// Integer (F,3) triangle list, row-major like numpy's `f`.
 using Faces = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
-/// MANO's fingertip vertices, in the order thumb, index, middle, ring, pinky (DESIGN §3).
+/// MANO's fingertip vertices, in the order thumb, index, middle, ring, pinky (docs/design.md §3).
 inline std::vector<int> manoTipVertices() { return {744, 320, 443, 554, 671}; }
 
 /// The 21 keypoints in OpenPose / MediaPipe order as indices into [16 joints, 5 tips]
-/// (16..20 are the tips of manoTipVertices()) (DESIGN §3, official).
+/// (16..20 are the tips of manoTipVertices()) (docs/design.md §3, official).
 inline std::vector<int> manoKeypointMap() {
   return {0, 13, 14, 15, 16, 1, 2, 3, 17, 4, 5, 6, 18, 10, 11, 12, 19, 7, 8, 9, 20};
 }

@@ -13,7 +13,7 @@
 // mean of the volar direction and the direction from the joint to the middle-finger MCP, both
 // made orthogonal to d (the thumb flexes across the palm).
 //
-// Roles come from the keypoint map when it has the 21 OpenPose/MediaPipe keypoints (DESIGN §3:
+// Roles come from the keypoint map when it has the 21 OpenPose/MediaPipe keypoints (docs/design.md §3:
 // 0 wrist, 1–4 thumb CMC/MCP/IP/tip, then 4 per finger MCP/PIP/DIP/tip). Joints that are no
 // keypoint (the default hand's finger metacarpals) or are tip keypoints, and joints whose rotation
 // moves no keypoint at all, are Fixed (strong prior to zero: they cannot be observed). Without a

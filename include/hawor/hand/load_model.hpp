@@ -15,7 +15,7 @@
 // base name for MANO and glTF files (MANO_LEFT.pkl, left.glb) and the stored flag for hawor
 // models. A hawor model whose stored side contradicts an explicit request is an error.
 //
-// findDefaultHandModel() locates the shipped, licence-free default hand (DESIGN §3: the WebXR
+// findDefaultHandModel() locates the shipped, licence-free default hand (docs/design.md §3: the WebXR
 // generic hands, converted by `hawor convert-hand` into hand_{left,right}.npz at build time).
 // Thread-safety: functions only (findDefaultHandModel reads the environment).
 #pragma once

@@ -1,5 +1,5 @@
 // hawor/hand/mano_loader.hpp — loads MANO_RIGHT.pkl / MANO_LEFT.pkl (or their .npz conversions)
-// into a HandModel without Python and without executing anything (DESIGN §3).
+// into a HandModel without Python and without executing anything (docs/design.md §3).
 //
 // The pickle is parsed symbolically (hand/pickle.hpp); this file then reads exactly the layout of
 // the official files: a dict with v_template (V,3), f (F,3), shapedirs (V,3,B), posedirs
@@ -16,7 +16,7 @@
 //     and `_shape` (older files: `shape`), densified.
 // Objects may be made by NEWOBJ or by `copy_reg._reconstructor(cls, object, None)` (protocols
 // 0/1). By default every global in the file must be one of allowedManoGlobals() (the types of
-// the layout in DESIGN §3); the error names the first other one (`os.system`, `builtins.eval` ...).
+// the layout in docs/design.md §3); the error names the first other one (`os.system`, `builtins.eval` ...).
 // Nothing is ever imported or called either way: the check is a clear refusal of files that are
 // not MANO models. Should a genuine file name another harmless type in a key that is not read,
 // ManoLoadOptions::strictGlobals = false checks only the values that are interpreted.
@@ -57,7 +57,7 @@ struct ManoLoadOptions {
   /// Auto: decided from the file name ("left" / "right" in the base name, any case).
   HandSide side = HandSide::Auto;
   /// Apply `shapedirs[:,0,:] *= −1` to left models: the released MANO_LEFT file's shape directions
-  /// were not mirrored in x (DESIGN §3). Turn off for files that were already fixed.
+  /// were not mirrored in x (docs/design.md §3). Turn off for files that were already fixed.
   bool fixLeftShapedirs = true;
   /// Store left faces with the winding [0,2,1] so that normals point outwards.
   bool flipLeftFaces = true;

@@ -1,4 +1,4 @@
-// hawor/hand/mirror.hpp — left/right hand conventions (DESIGN §3).
+// hawor/hand/mirror.hpp — left/right hand conventions (docs/design.md §3).
 //
 // The left MANO model is the mirror image of the right one under M = diag(−1, 1, 1) (x negated).
 // Mirroring a rotation conjugates it, R_L = M·R_R·M, and for an axis-angle w that is
@@ -43,7 +43,7 @@ inline Faces flipFaceWinding(const Faces& f) {
   return out;
 }
 
-/// The known bug of the released MANO_LEFT file (DESIGN §3): its shape directions were not
+/// The known bug of the released MANO_LEFT file (docs/design.md §3): its shape directions were not
 /// mirrored in x. Applies `shapedirs[:, 0, :] *= −1` (the x rows of the (3V, B) matrix).
 template <typename Scalar>
 void fixLeftShapedirs(HandModel<Scalar>& model) {

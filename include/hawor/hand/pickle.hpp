@@ -1,6 +1,6 @@
 // hawor/hand/pickle.hpp — a symbolic, NON-executing reader for Python pickles (protocols 0–5).
 //
-// Why: the MANO model files are Python-2 pickles (DESIGN §3). Loading them with Python's pickle
+// Why: the MANO model files are Python-2 pickles (docs/design.md §3). Loading them with Python's pickle
 // runs arbitrary code named in the file; this reader instead interprets every opcode into an
 // inert value tree and never imports, calls or evaluates anything. Globals become names
 // (`Global{module, name}`), REDUCE / NEWOBJ / OBJ / INST become records of "what would have been

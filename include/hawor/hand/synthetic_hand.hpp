@@ -1,6 +1,6 @@
 // hawor/hand/synthetic_hand.hpp — a procedural, licence-free right hand with MANO's structure
 // (16 joints with MANO's parents and joint order, 10 shape coefficients, 135 pose-corrective
-// features, 5 fingertip vertices, the 21-keypoint map of DESIGN §3), for tests and benchmarks
+// features, 5 fingertip vertices, the 21-keypoint map of docs/design.md §3), for tests and benchmarks
 // when no MANO file is at hand. Not a replacement for MANO's learned shape space.
 //
 // Geometry (metres, rest pose, right hand): wrist joint at `origin`, fingers along −x, the index

@@ -3,7 +3,7 @@
 // Format (TUM RGB-D benchmark, read by evo and most SLAM tools): one pose per line,
 //   timestamp tx ty tz qx qy qz qw
 // separated by spaces or tabs; lines starting with '#' and blank lines are skipped. The pose is
-// camera-to-world (DESIGN §2): (tx, ty, tz) is the camera centre in the world frame and the
+// camera-to-world (docs/design.md §2): (tx, ty, tz) is the camera centre in the world frame and the
 // quaternion, in x y z w order in the file, rotates camera axes into world axes. Inside the
 // library quaternions are Eigen's (w, x, y, z).
 // Reading normalises quaternions and rejects malformed lines (wrong field count, non-numbers,

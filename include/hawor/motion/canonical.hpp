@@ -1,4 +1,4 @@
-// hawor/motion/canonical.hpp — camera → world → canonical space of a hand sequence (DESIGN §3, §7).
+// hawor/motion/canonical.hpp — camera → world → canonical space of a hand sequence (docs/design.md §3, §7).
 //
 // Every transform moves the hand rigidly about its root joint (joint 0), because MANO rotates
 // about joint 0 (transformHandFrame): root = trans + J0, offset = trans − root = −J0, where J0 is
@@ -33,7 +33,7 @@ inline Eigen::Index firstValid(const ValidMask& valid, const char* what) {
 }
 }  // namespace detail
 
-/// Camera-space hand → world space, per frame t (official cam2world, DESIGN §3):
+/// Camera-space hand → world space, per frame t (official cam2world, docs/design.md §3):
 ///   R_w = R_c2w(t)·R_c,  root_w = R_c2w(t)·(trans_c + J0) + t_c2w(t),  trans_w = root_w − J0
 /// i.e. world translation = R_c2w·root + t_c2w + offset with offset = −J0. Every frame is
 /// transformed (missing ones too); validity, hand_pose and betas are copied.
@@ -86,7 +86,7 @@ CanonicalFrame<Scalar> canonicalFrameAt(const HandMotion<Scalar>& world, const P
   return c;
 }
 
-/// Canonical frame of a world-space hand sequence (official, DESIGN §7), from its first valid
+/// Canonical frame of a world-space hand sequence (official, docs/design.md §7), from its first valid
 /// frame 0':
 ///   R_w2can = R_root(0')ᵀ,  t_w2can = −R_w2can·root(0') − offset(0'),  offset = −J0(0')
 /// Applied with transformHandFrame this gives frame 0' the identity rotation (R_w2can·R_root(0'))
@@ -137,7 +137,7 @@ HandMotion<Scalar> canonicalToWorld(const HandMotion<Scalar>& can, const Canonic
   return out;
 }
 
-/// Per-frame camera → canonical transforms of the paper (supplementary, DESIGN §7), with 0 the
+/// Per-frame camera → canonical transforms of the paper (supplementary, docs/design.md §7), with 0 the
 /// first valid frame, A = R_c0·Φ_0:
 ///   R^{c_t→cano} = A⁻¹·R_{c_t},   t^{c_t→cano} = A⁻¹·(t_{c_t} − t_{c0} − R_{c0}·Γ_0)
 ///   Φ^cano_t = R^{c_t→cano}·Φ_t,   Γ^cano_t = R^{c_t→cano}·Γ_t + t^{c_t→cano}.

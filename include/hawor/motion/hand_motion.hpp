@@ -15,9 +15,9 @@
 namespace hawor {
 
 /// MANO parameters of one hand over T frames (the official output keys). Rows are frames.
-///   rot        T×3   global orientation, axis-angle (rotation about joint 0, DESIGN §3)
+///   rot        T×3   global orientation, axis-angle (rotation about joint 0, docs/design.md §3)
 ///   trans      T×3   MANO translation `transl` (joint 0 sits at trans + J0(β))
-///   hand_pose  T×45  15 joint rotations, axis-angle, no PCA, no hands_mean (DESIGN §3)
+///   hand_pose  T×45  15 joint rotations, axis-angle, no PCA, no hands_mean (docs/design.md §3)
 ///   betas      T×10  shape
 /// Other skinned hands with the same structure are accepted (zeros() makes MANO's sizes):
 /// hand_pose T×3K for K joint rotations (the default WebXR hand: K = 24) and betas T×B for any

@@ -1,11 +1,11 @@
-// hawor/motion/infill.hpp — motion infilling of one hand: world → canonical (DESIGN §7) → fill
+// hawor/motion/infill.hpp — motion infilling of one hand: world → canonical (docs/design.md §7) → fill
 // → world, only the missing frames replaced; the data-free methods, and the spline as a window
 // infiller for the windowed pipeline (infill_window.hpp).
 //
 // Methods (all data-free):
 //   LastPose  a gap repeats the last observed frame (the paper's "last pose" baseline)
 //   Lerp      LERP of translation and betas, SLERP of every rotation (the paper's LERP baseline,
-//             and the pre-fill of DESIGN §7)
+//             and the pre-fill of docs/design.md §7)
 //   Spline    the cubic Hermite / SO(3) spline with boundary velocities (spline_infill.hpp)
 // The data-free methods run on the whole sequence at once (they need no window; a gap that
 // crosses a 120-frame window boundary keeps its context on both sides): the canonical frame is

@@ -1,5 +1,5 @@
 // hawor/motion/infill_window.hpp — the windowed two-hand infilling pipeline of the original
-// method (DESIGN §7) and the interface a window infiller (the transformer) plugs into.
+// method (docs/design.md §7) and the interface a window infiller (the transformer) plugs into.
 //
 // For a sequence of T frames with both hands in world space (each with its validity):
 //   1. split into windows of W = 120 frames: [0, W), [W, 2W), …; the last, shorter window is
@@ -10,7 +10,7 @@
 //      prefill.hpp), in canonical space;
 //   3. features per frame: [left hand | right hand], per hand
 //        [trans (3) | betas (B) | rot6d of the global orientation (6) | rot6d of each joint (6K)]
-//      (MANO: 3 + 10 + 6 + 90 = 109, two hands 218; the official order, rot6d of DESIGN §2);
+//      (MANO: 3 + 10 + 6 + 90 = 109, two hands 218; the official order, rot6d of docs/design.md §2);
 //   4. the infiller maps the window's features and validity to features of the same shape;
 //   5. per hand, only the window's frames that were missing for that hand (padding excluded)
 //      take the output: rot6d → rotation (Gram–Schmidt), canonical → world.

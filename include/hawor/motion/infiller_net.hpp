@@ -1,4 +1,4 @@
-// hawor/motion/infiller_net.hpp — the original HaWoR infiller network (DESIGN §7), forward pass
+// hawor/motion/infiller_net.hpp — the original HaWoR infiller network (docs/design.md §7), forward pass
 // only, for weights converted from the official checkpoint (infiller_weights.hpp; none ship).
 //
 // One window of T ≤ W (= 120) frames, x (T × F), F = 218 = two hands × 109 features, and a
@@ -22,8 +22,8 @@
 //     GELU(x) = x/2·(1 + erf(x/√2)) (the exact form, PyTorch's default)
 //   y = h·W_decᵀ + b_dec                                   (T × F)
 // Dropout is off (eval). The caller keeps y only at frames to fill (official: invalid frames).
-// Every step is the official one read from the authors' model code (DESIGN's "facts to match");
-// the points DESIGN leaves open (the normalised residual, ReLU and width H in stage 1, no mask
+// Every step is the official one read from the authors' model code (docs/design.md §7, *official*);
+// the points docs/design.md §7 leaves open (the normalised residual, ReLU and width H in stage 1, no mask
 // in stage 2, the PE table) follow it, so that converted weights reproduce its output.
 //
 // Cost: ≈ 8.7 GFLOP per 120-frame window (the feed-forwards are 70 %). Natively Eigen's GEMM

@@ -1,5 +1,5 @@
 // hawor/motion/infiller_weights.hpp — the infiller network's sizes and weights, read from an
-// .npz of named tensors (DESIGN §7; the network itself is infiller_net.hpp).
+// .npz of named tensors (docs/design.md §7; the network itself is infiller_net.hpp).
 //
 // Tensor names are exactly the keys of the official checkpoint's state_dict
 // (ckpt["transformer_encoder_state_dict"] of the original `TransformerModel(seq_len=120,
@@ -47,7 +47,7 @@
 
 namespace hawor {
 
-/// Sizes of the infiller network. The defaults are the official model's (DESIGN §7); smaller
+/// Sizes of the infiller network. The defaults are the official model's (docs/design.md §7); smaller
 /// ones serve tests.
 struct InfillerConfig {
   int window = 120;       ///< frames per window W (length of the positional table)

@@ -1,6 +1,6 @@
 // hawor/motion/motion.hpp — umbrella header of the motion module: interpolation, gap filling,
 // hand sequences, camera → world → canonical transforms, pre-fill, the spline infiller, the
-// observed-frame smoother and the windowed infilling pipeline (DESIGN §7).
+// observed-frame smoother and the windowed infilling pipeline (docs/design.md §7).
 #pragma once
 
 #include "hawor/motion/canonical.hpp"

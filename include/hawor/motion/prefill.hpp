@@ -1,4 +1,4 @@
-// hawor/motion/prefill.hpp — pre-fill of a hand's missing frames (DESIGN §7, paper's baselines).
+// hawor/motion/prefill.hpp — pre-fill of a hand's missing frames (docs/design.md §7, paper's baselines).
 //
 // Two fills of a HandMotion, both leaving valid frames bit for bit unchanged and the validity mask
 // as it was (it keeps recording which frames were observed):

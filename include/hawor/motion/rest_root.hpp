@@ -1,5 +1,5 @@
 // hawor/motion/rest_root.hpp — J0, the rest position of joint 0 of the shaped hand, that the
-// camera → world → canonical rules (canonical.hpp, DESIGN §3) need: MANO rotates about joint 0.
+// camera → world → canonical rules (canonical.hpp, docs/design.md §3) need: MANO rotates about joint 0.
 // Per frame from that frame's betas; missing frames (any content, NaN included) take the betas
 // linearly interpolated between observed ones (sequence.hpp), so J0 is finite everywhere.
 // Thread-safety: pure functions.

@@ -5,7 +5,7 @@
 // observed (valid), zero = missing. Gap filling never modifies a valid frame: its row is copied
 // bit for bit; only missing rows are written.
 //
-// Fill rules (DESIGN §7 pre-fill, and the paper's "last pose" baseline):
+// Fill rules (docs/design.md §7 pre-fill, and the paper's "last pose" baseline):
 //   fillLinear     interior gap between valid frames a < b: x_t = x_a + (t−a)/(b−a)·(x_b − x_a)
 //   fillRotations  the same fraction, SLERP per axis-angle triple (short path)
 //   fillLastPose   a gap holds the last valid frame before it

@@ -1,6 +1,6 @@
 // hawor/motion/slerp.hpp — spherical and linear interpolation of rotations and vectors.
 //
-// Used by the pre-fill of missing frames (DESIGN §7: LERP for translation and betas, SLERP for
+// Used by the pre-fill of missing frames (docs/design.md §7: LERP for translation and betas, SLERP for
 // global and joint rotations). Quaternions are Eigen's (w, x, y, z), assumed unit (normalised
 // here anyway so that a slightly drifted input still gives a unit result).
 #pragma once

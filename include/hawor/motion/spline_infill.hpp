@@ -2,7 +2,7 @@
 // translation and on SO(3) for every rotation, with boundary velocities from the visible context.
 //
 // An interior gap of missing frames between the valid frames a < b (N = b − a) is filled by the
-// chord (LERP / SLERP, the pre-fill of DESIGN §7) plus a deviation that makes the curve leave a
+// chord (LERP / SLERP, the pre-fill of docs/design.md §7) plus a deviation that makes the curve leave a
 // and enter b with the velocities the hand had there:
 //   translation  p(t) = p_a + u·(p_b − p_a) + δ(t),                 u = (t − a)/N
 //   rotation     R(t) = R_a·exp(u·Ω)·exp(δ(t)),  Ω = log(R_aᵀR_b)   (body-frame deviation)

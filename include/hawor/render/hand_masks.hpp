@@ -1,6 +1,6 @@
 // hawor/render/hand_masks.hpp — the hand masks of one frame from fitted hands: each hand's
 // forward pass (hand/forward.hpp) drawn into one mask at the camera's size (mask.hpp), optionally
-// dilated. This is what the SLAM's dual masking and the scale step consume (DESIGN §5, §6).
+// dilated. This is what the SLAM's dual masking and the scale step consume (docs/design.md §5, §6).
 // Labels: every hand carries a value; equal values give the union of the silhouettes, different
 // values a z-buffered labelled mask (nearest surface wins). Dilation (a disc of dilatePx pixels,
 // dilateMask) needs one common value: a dilated ring has no nearest surface to take a label from.

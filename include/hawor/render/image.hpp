@@ -1,6 +1,6 @@
 // hawor/render/image.hpp — a minimal owning image: width × height × channels samples of T.
 //
-// Layout (DESIGN §2): row-major, origin top-left, channels interleaved, no padding and no
+// Layout (docs/design.md §2): row-major, origin top-left, channels interleaved, no padding and no
 // alignment assumption: sample (x, y, c) lives at data[(y·width + x)·channels + c]. Pixel centres
 // are at integer coordinates, so pixel (x, y) covers [x − ½, x + ½] × [y − ½, y + ½].
 // A plain value type; thread-safe to read, one writer at a time.

@@ -1,9 +1,9 @@
 // hawor/render/mask.hpp — binary hand masks: mesh silhouettes, dilation, resizing, coverage.
 //
-// The SLAM's dual masking (DESIGN §5) needs, per frame, the union of both hands' rendered
-// silhouettes at the SLAM resolution; the metric-scale fit (DESIGN §6) drops pixels with mask
+// The SLAM's dual masking (docs/design.md §5) needs, per frame, the union of both hands' rendered
+// silhouettes at the SLAM resolution; the metric-scale fit (docs/design.md §6) drops pixels with mask
 // ≥ 0.5. Masks are Image<uint8_t> with one channel; 0 = background, anything else = set.
-// Pixel centres at integer coordinates (DESIGN §2). No global state; thread-safe per call.
+// Pixel centres at integer coordinates (docs/design.md §2). No global state; thread-safe per call.
 #pragma once
 
 #include <algorithm>
@@ -273,7 +273,7 @@ enum class MaskResize {
 /// integer-centre convention: output pixel x covers source [x·W/w, (x+1)·W/w) in "left edge"
 /// coordinates. Nearest: source column ⌊(2x + 1)·W / (2w)⌋ (exact integer maths; values are
 /// copied, so labels survive). Area: exact rational coverage of the footprint by nonzero source
-/// pixels, set (to `value`) iff ≥ 0.5 — the "mask ≥ 0.5" rule of DESIGN §6 applied to the
+/// pixels, set (to `value`) iff ≥ 0.5 — the "mask ≥ 0.5" rule of docs/design.md §6 applied to the
 /// area-averaged mask. `out` may be `in`.
 inline void resizeMask(const Mask& in, int width, int height, Mask& out,
                        MaskResize rule = MaskResize::Area, std::uint8_t value = 255) {

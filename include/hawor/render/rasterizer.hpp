@@ -2,7 +2,7 @@
 // pinhole camera: near-plane clipping, z-buffer, top-left fill rule, perspective-correct
 // barycentrics handed to a per-pixel functor.
 //
-// Conventions (DESIGN §2): OpenCV camera frame (x right, y down, z forward); pixel centres at
+// Conventions (docs/design.md §2): OpenCV camera frame (x right, y down, z forward); pixel centres at
 // integer coordinates, a pixel (x, y) is drawn iff its centre (x, y) lies inside the projected
 // triangle. Depth is metres along z (not the ray length).
 //

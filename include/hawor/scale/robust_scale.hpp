@@ -1,5 +1,5 @@
 // hawor/scale/robust_scale.hpp — metric scale of a monocular SLAM from metric depth: the official
-// adaptive-sampling robust fit (AdaSM, DESIGN §6, HaWoR's est_scale_hybrid) and the plain median
+// adaptive-sampling robust fit (AdaSM, docs/design.md §6, HaWoR's est_scale_hybrid) and the plain median
 // baseline ("w/o AdaSM" in the paper's ablation: ATE-S 14.61 mm with AdaSM, 20.97 mm without).
 //
 // Per keyframe, SLAM depths d_i (map units, > 0) and metric depths D_i (metres) at the same pixels,

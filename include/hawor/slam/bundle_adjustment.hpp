@@ -3,19 +3,19 @@
 // (Triggs et al. 2000, "Bundle adjustment — a modern synthesis", §6; Lourakis & Argyros, SBA).
 //
 // Parameters
-//   poses:  T_w_c, CAMERA-TO-WORLD (DESIGN §2), updated by the right perturbation
+//   poses:  T_w_c, CAMERA-TO-WORLD (docs/design.md §2), updated by the right perturbation
 //           T_w_c ← T_w_c·exp(δ), δ = (ρ, φ) ∈ R⁶ in the camera (body) frame, SE3's tangent order.
 //   points: Euclidean world points X ∈ R³, updated X ← X + δX. (No inverse depth: points very far
 //           from every camera are weakly constrained along the ray; LM damping keeps them bounded.)
 // Residual of observation i (pose c, point p, pixel uv, weight w_i ≥ 0):
-//   X_c = R_cwX + t_cw (T_c_w = T_w_c⁻¹),  r_i = π(X_c) − uv  (pixels, DESIGN §2 pixel centres),
+//   X_c = R_cwX + t_cw (T_c_w = T_w_c⁻¹),  r_i = π(X_c) − uv  (pixels, docs/design.md §2 pixel centres),
 //   ∂r/∂δ = Jπ·[−I, X_c^],  ∂r/∂X = Jπ·R_cw,  Jπ = [fx/z, 0, −fx·x/z²; 0, fy/z, −fy·y/z²]
 //   (exp(−δ)·X_c ≈ X_c − ρ + X_c^·φ).
 // Cost
 //   F = Σ_i w_i ρ(‖r_i‖²/σ²) + Σ_priors w_k (‖c_b − c_a‖ − d_k)²
 //   with ρ the robust loss of geometry/robust_loss.hpp (scale k = robustScale, in units of σ) and
 //   c = translation of T_w_c (the camera centre). Observations with weight 0 are ignored entirely
-//   (the hand-masked residuals of DESIGN §5); observations at depth ≤ minDepth at the start are
+//   (the hand-masked residuals of docs/design.md §5); observations at depth ≤ minDepth at the start are
 //   excluded (counted in the report); a step that would move a used observation behind its camera
 //   is rejected like a cost increase.
 // Robust loss by IRLS: weights w_i ρ'(s_i)/σ² at the linearisation point give g = Σ w Jᵀr and
@@ -67,7 +67,7 @@ template <typename Scalar>
 struct BAObservation {
   int pose = 0;
   int point = 0;
-  Vec2<Scalar> uv = Vec2<Scalar>::Zero();  ///< pixel (DESIGN §2: pixel centres at integers)
+  Vec2<Scalar> uv = Vec2<Scalar>::Zero();  ///< pixel (docs/design.md §2: pixel centres at integers)
   Scalar weight = Scalar(1);               ///< w_i ≥ 0, multiplies the robust cost
 };
 
@@ -407,7 +407,7 @@ BAReport<Scalar> bundleAdjust(BAProblem<Scalar>& problem, const BAOptions<Scalar
   using M26 = Eigen::Matrix<Scalar, 2, 6>;
   using M23 = Eigen::Matrix<Scalar, 2, 3>;
   using M63 = Eigen::Matrix<Scalar, 6, 3>;
-  // Unaligned storage types for std::vector (DESIGN §2: no alignment assumptions).
+  // Unaligned storage types for std::vector (docs/design.md §2: no alignment assumptions).
   using S3 = Eigen::Matrix<Scalar, 3, 1, Eigen::DontAlign>;
   using S6 = Eigen::Matrix<Scalar, 6, 1, Eigen::DontAlign>;
   using SM3 = Eigen::Matrix<Scalar, 3, 3, Eigen::DontAlign>;

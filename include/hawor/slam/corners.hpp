@@ -10,7 +10,7 @@
 // (existing tracks) gets no new one, others get their best candidates, and candidates closer than
 // minDistance to any feature are dropped (greedy, strongest first) — an even spread over the
 // image, which pose estimation needs more than the strongest corners. Pixels set in `blocked`
-// (the dilated hand mask: DESIGN §5's front-end masking) never get a corner.
+// (the dilated hand mask: docs/design.md §5's front-end masking) never get a corner.
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // hawor/slam/focal_refine.hpp — self-calibration of a shared focal length (fx, fy scaled by one
-// factor, principal point fixed) from a bundle-adjustment problem: the focal of DESIGN §5
+// factor, principal point fixed) from a bundle-adjustment problem: the focal of docs/design.md §5
 // "refined by the SLAM where possible".
 //
 // Method: the PROFILE of the bundle-adjustment cost over u = log(f / f_guess),

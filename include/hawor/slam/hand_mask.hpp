@@ -1,4 +1,4 @@
-// hawor/slam/hand_mask.hpp — the hand masks of the SLAM's dual masking (DESIGN §5; the paper
+// hawor/slam/hand_mask.hpp — the hand masks of the SLAM's dual masking (docs/design.md §5; the paper
 // masks the hands out of DROID-SLAM's flow and its bundle adjustment alike).
 //
 // A mask is an 8-bit image of the frame's size, hand pixels non-zero (any channel layout: a pixel

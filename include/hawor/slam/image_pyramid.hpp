@@ -7,7 +7,7 @@
 //              Gaussian of σ ≈ 1, enough against aliasing for a factor 2), then every second
 //              pixel: size ⌈w/2⌉ × ⌈h/2⌉, pixel (x, y) of level l+1 at (2x, 2y) of level l, so a
 //              level-l coordinate is 2^l times the level-0 one (pixel centres at integers,
-//              DESIGN §2). Borders are replicated.
+//              docs/design.md §2). Borders are replicated.
 // Bilinear sampling with replicated borders for sub-pixel KLT patches.
 // Pure value types; the build reuses buffers (no allocation for a repeated size).
 #pragma once

@@ -1,4 +1,4 @@
-// hawor/slam/mono_slam.hpp — sparse monocular SLAM with dual hand masking (DESIGN §5): the
+// hawor/slam/mono_slam.hpp — sparse monocular SLAM with dual hand masking (docs/design.md §5): the
 // camera trajectory of the method, CPU- and WASM-friendly in place of DROID-SLAM.
 //
 // Per frame (process):
@@ -84,9 +84,9 @@
 // frames that still have no pose get their position from the HEAD MODEL fitted to the posed
 // frames around them where it explains them (head_motion.hpp: c = n + M·z, the eye in front of
 // the neck), else interpolated between their neighbours.
-// Output frame: camera-to-world poses (DESIGN §2) with the world = the first frame's camera,
+// Output frame: camera-to-world poses (docs/design.md §2) with the world = the first frame's camera,
 // monocular scale (the first baseline is 1 in the map's units); per-keyframe sparse depths
-// (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (DESIGN §6).
+// (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (docs/design.md §6).
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
@@ -1014,7 +1014,7 @@ class MonoSlam {
     // loss: by the tracks' observations in the old map's keyframes when they determine a
     // similarity (joinToOldMap; the new keyframes then continue the old segment), else the
     // rotation from the rays, the position held and the scale from the median scene depth of
-    // the last map, DESIGN §5).
+    // the last map, docs/design.md §5).
     Scalar s = Scalar(1);
     std::vector<char> linked;
     const bool joined = everInitialised_ && opt_.joinOldMap && joinToOldMap(f, tv, idx, Tref, s, linked);
@@ -1928,7 +1928,7 @@ class MonoSlam {
         if (kfVar[static_cast<std::size_t>(o.kf)] < 0) addKf(o.kf, true);
       }
     }
-    // Gauge, per segment (DESIGN §5: monocular, 7 freedoms). Local: the keyframes outside the
+    // Gauge, per segment (docs/design.md §5: monocular, 7 freedoms). Local: the keyframes outside the
     // window that see its points are fixed; when fewer than two of a segment's are, its oldest
     // free keyframe is fixed too, and with none at all its first baseline is held by a scale
     // prior. Global: each segment's first keyframe fixed, a scale prior on its first baseline.

@@ -2,7 +2,7 @@
 // P3P (slam/p3p.hpp) inside adaptive MSAC (slam/ransac.hpp), then robust Levenberg–Marquardt on
 // SE(3) over the inliers (refinePose), the tracking step of the SLAM.
 //
-// Pose: T_w_c, CAMERA-TO-WORLD (DESIGN §2), refined by the right perturbation T_w_c ← T_w_c·exp(δ),
+// Pose: T_w_c, CAMERA-TO-WORLD (docs/design.md §2), refined by the right perturbation T_w_c ← T_w_c·exp(δ),
 // exactly as a free pose of bundle_adjustment.hpp (same residual and Jacobian:
 // r = π(T_w_c⁻¹·X) − uv in pixels, ∂r/∂δ = Jπ·[−I, X_c^]).
 // Cost of the refinement: F = Σ_i c_i ρ(‖r_i‖²/σ²) (robust_loss.hpp; IRLS weights ρ', optional

@@ -28,7 +28,7 @@
 //      residual, within [minGatePx, maxReprojPx]) and every track is re-triangulated against the
 //      new poses with it (a track that slid by a few pixels keeps one side of its jump; points
 //      with too few observations left are dropped), then adjusted again.
-// Input observations are in pixels (DESIGN §2); poses camera-to-world (T_w_c). Pure function,
+// Input observations are in pixels (docs/design.md §2); poses camera-to-world (T_w_c). Pure function,
 // thread-safe.
 #pragma once
 

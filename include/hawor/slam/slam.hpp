@@ -1,4 +1,4 @@
-// hawor/slam/slam.hpp — the SLAM module (issue 4, DESIGN §5): front end (pyramid, hand masks,
+// hawor/slam/slam.hpp — the SLAM module (issue 4, docs/design.md §5): front end (pyramid, hand masks,
 // Shi–Tomasi corners with bucketing, pyramidal KLT), minimal solvers and robust estimation
 // (RANSAC, 5-point essential, homography, P3P, PnP-RANSAC, triangulation, two-view
 // initialisation), sparse bundle adjustment, the full-sequence refinement, the head model of a

@@ -48,7 +48,7 @@
 //     good points, first camera fixed, Huber loss, rescaled so that |t| = 1; then the inliers are
 //     re-classified by the Sampson error of the refined motion (new ones triangulated) and, if
 //     they changed, the adjustment is run once more.
-// Output frame: camera 1 is the world (DESIGN §2: the first keyframe); T_c1_c2 is the camera-to-
+// Output frame: camera 1 is the world (docs/design.md §2: the first keyframe); T_c1_c2 is the camera-to-
 // world pose of camera 2 with ‖t‖ = 1 (monocular scale); points are in camera-1 coordinates.
 // Inputs are normalised coordinates x = K⁻¹(u, v, 1); pixel thresholds are converted with focalPx.
 // Pure function, thread-safe.

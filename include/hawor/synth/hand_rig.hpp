@@ -8,7 +8,7 @@
 // hand/joint_limits.hpp), made orthogonal to a; F_model = [a, n, a × n] (columns).
 // A target frame (finger direction A, volar normal N, in any frame) gives the global orientation
 // R = F_target·F_modelᵀ, F_target = [A, N⊥, A × N⊥]; MANO rotates about joint 0, so the wrist lands
-// at p when transl = p − J_0(β) (DESIGN §3).
+// at p when transl = p − J_0(β) (docs/design.md §3).
 // Articulation: a Gesture holds a curl in [0, 1] per finger (thumb, index, middle, ring, pinky)
 // and a spread in [−1, 1]; each limited joint of JointLimits gets the anatomical angles
 //   flexion = lo + (hi − lo)·(0.2 + 0.65·curl),  abduction = spread·s_f·hi (MCP / thumb CMC only),
@@ -53,7 +53,7 @@ struct Gesture {
 template <typename Scalar>
 class HandRig {
  public:
-  /// Requires a prepared model with the 21 keypoints (DESIGN §3 order).
+  /// Requires a prepared model with the 21 keypoints (docs/design.md §3 order).
   explicit HandRig(const HandModel<Scalar>& model) : model_(&model) {
     if (!model.prepared()) throw Error("synth hand rig: the hand model is not prepared (call prepare())");
     if (model.numKeypoints() != 21) {

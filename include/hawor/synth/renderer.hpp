@@ -6,7 +6,7 @@
 // z-buffer (no culling, near plane 1 cm); the fragment functor keeps, per pixel, the id of the
 // nearest face (scene faces first, then each hand's faces) and its q = b/z (perspective-correct
 // barycentrics up to the depth). The z-buffer IS the depth image: metres along the optical axis
-// (DESIGN §2), +inf where nothing was drawn (never inside the closed room). (2) Shading, once per
+// (docs/design.md §2), +inf where nothing was drawn (never inside the closed room). (2) Shading, once per
 // pixel:
 //   scene   texture(material, uv = Σ b_i·uv_i) × tint × shade(face), trilinear texture filtering
 //           with a footprint of z·texelsPerMetre / (fx·max(|cos θ|, 0.2)) level-0 texels (θ: angle

@@ -1,11 +1,11 @@
 // hawor/synth/sequence.hpp — a synthetic egocentric sequence with ground truth: camera poses,
 // RGB, depth, hand masks, hand parameters and keypoints, for a preset and a seed.
 //
-// Frames (DESIGN §2). The scene lives in its room frame (scene.hpp, z up). The OUTPUT world
+// Frames (docs/design.md §2). The scene lives in its room frame (scene.hpp, z up). The OUTPUT world
 // frame is the first camera's frame (frame 0 has the identity pose), metres: T_w_room =
 // T_room_c(0)⁻¹. Camera poses are camera-to-world, T_w_c(i) = T_w_room·T_room_c(i), at times
 // t_i = i / fps. gravityWorld() is the world direction of gravity.
-// Hands (DESIGN §3). Per hand and frame the MANO parameters in the world frame: rot (axis-angle
+// Hands (docs/design.md §3). Per hand and frame the MANO parameters in the world frame: rot (axis-angle
 // of joint 0), hand_pose (the J−1 joint axis-angles), betas (fixed per sequence, shared by both
 // hands: one person), trans, with vertices = forward(rot, hand_pose, betas, trans) in world
 // coordinates (the rotation acts about J_0(β): the wrist is at J_0(β) + trans). The camera-frame

@@ -11,7 +11,7 @@
 // Orientation from the angles (room frame of scene.hpp: z up): forward
 // f = (cos p·cos y, cos p·sin y, sin p) (yaw y about +z from +x, pitch p up from the horizontal),
 // right r0 = normalise(f × z), down d0 = f × r0, then roll ρ about f: r = cos ρ·r0 + sin ρ·d0,
-// d = f × r. The camera-to-room rotation has columns (r, d, f): the OpenCV camera frame (DESIGN §2,
+// d = f × r. The camera-to-room rotation has columns (r, d, f): the OpenCV camera frame (docs/design.md §2,
 // x right, y down, z forward). Pitch is kept inside (−80°, 80°), so f never meets the vertical.
 //
 // makeCameraPath() builds the paths of the presets:

@@ -2,7 +2,7 @@
 // mapping of network coordinates back to the image. Pure JavaScript on typed arrays, shared by
 // the browser app and node.
 //
-// Conventions (DESIGN §2): image pixels, origin top-left, pixel centres at integer coordinates,
+// Conventions (docs/design.md §2): image pixels, origin top-left, pixel centres at integer coordinates,
 // so the image spans [-0.5, W-0.5] x [-0.5, H-0.5]. A ROI is { cx, cy, w, h, rotation } in
 // pixels and radians: the crop's normalised point (u, v) in [-0.5, 0.5]^2 (u right, v down) is
 // the image point

@@ -6,7 +6,7 @@
 // nothing but the project's geometry.
 //
 // Frames: { width, height, data: Uint8Array | Uint8ClampedArray, channels: 3 | 4 } (RGB from a
-// decoder, or a canvas ImageData with channels 4). Outputs are in image pixels (DESIGN §2) and
+// decoder, or a canvas ImageData with channels 4). Outputs are in image pixels (docs/design.md §2) and
 // world landmarks in metres (see landmarks.mjs).
 
 import { cropImage, letterboxRoi, iou } from './geometry.mjs';

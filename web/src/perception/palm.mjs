@@ -1,7 +1,7 @@
 // palm.mjs: MediaPipe palm detection (full / lite, 192 x 192) post-processing: anchors, box and
 // keypoint decoding, weighted non-maximum suppression, and the hand ROI a palm implies.
 //
-// Network outputs (DESIGN §4): regressors [1, 2016, 18] and score logits [1, 2016, 1]. Per
+// Network outputs (docs/design.md §4): regressors [1, 2016, 18] and score logits [1, 2016, 1]. Per
 // anchor the regressors are the box centre x, y, width, height and 7 keypoints (x, y), in input
 // pixels (0..192) relative to the anchor centre; keypoint 0 is the wrist, 2 the middle-finger MCP.
 // Anchors (SSD, fixed unit size): a 24 x 24 grid with 2 anchors per cell (stride 8), then a

@@ -129,7 +129,7 @@ function checkAbort(signal) {
 const now = () => (typeof performance !== 'undefined' ? performance.now() : Date.now());
 
 /** Pinhole intrinsics for a frame: a given focal, or one from a diagonal field of view. The
- *  principal point is the image centre (pixel centres at integer coordinates, DESIGN §2). */
+ *  principal point is the image centre (pixel centres at integer coordinates, docs/design.md §2). */
 export function defaultIntrinsics(width, height, { focalPx, fovDeg } = {}) {
   if (!(width > 0 && height > 0)) throw new Error(`intrinsics: bad image size ${width}x${height}`);
   const halfDiag = 0.5 * Math.hypot(width, height);
