@@ -4,6 +4,7 @@
 #pragma once
 
 #include "hand_model.hpp"
+#include "portable_random.hpp"
 #include "forward.hpp"
 #include "mirror.hpp"
 #include "pickle.hpp"

@@ -1,6 +1,7 @@
 // hawor/motion/motion.hpp — umbrella header of the motion module: interpolation, gap filling,
 // hand sequences, camera → world → canonical transforms, pre-fill, the spline infiller, the
-// observed-frame smoother and the windowed infilling pipeline (docs/design.md §7).
+// observed-frame smoother, the windowed infilling pipeline and the original infiller network's
+// forward pass for a user's converted weights (docs/design.md §7).
 #pragma once
 
 #include "hawor/motion/canonical.hpp"
@@ -15,3 +16,6 @@
 #include "hawor/motion/slerp.hpp"
 #include "hawor/motion/smooth.hpp"
 #include "hawor/motion/spline_infill.hpp"
+#include "hawor/motion/infiller_weights.hpp"
+#include "hawor/motion/infiller_net.hpp"
+#include "hawor/motion/transformer_infill.hpp"

@@ -5,3 +5,4 @@
 #include "hawor/render/rasterizer.hpp"
 #include "hawor/render/mask.hpp"
 #include "hawor/render/hand_masks.hpp"
+#include "hawor/render/resample.hpp"

@@ -1,4 +1,4 @@
-// hawor/slam/slam.hpp — the SLAM module (issue 4, docs/design.md §5): front end (pyramid, hand masks,
+// hawor/slam/slam.hpp — the SLAM module (docs/design.md §5): front end (pyramid, hand masks,
 // Shi–Tomasi corners with bucketing, pyramidal KLT), minimal solvers and robust estimation
 // (RANSAC, 5-point essential, homography, P3P, PnP-RANSAC, triangulation, two-view
 // initialisation), sparse bundle adjustment, the full-sequence refinement, the head model of a
@@ -17,6 +17,10 @@
 #include "two_view.hpp"
 #include "pnp_ransac.hpp"
 #include "bundle_adjustment.hpp"
+#include "similarity_join.hpp"
+#include "turn_scale.hpp"
+#include "turn_bridge.hpp"
+#include "focal_refine.hpp"
 #include "sequence_refine.hpp"
 #include "head_motion.hpp"
 #include "mono_slam.hpp"
