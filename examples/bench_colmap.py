@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""COLMAP side of the SLAM benchmark (issue 4): run COLMAP's sequential SfM on the first N
+"""COLMAP side of the SLAM benchmark: run COLMAP's sequential SfM on the first N
 frames of a `hawor synth` sequence and measure its camera trajectory against ground truth.
 
     bench_colmap.py SEQ_DIR [--masked] [--frames N] [--work DIR] [--out-tum F] [--json F]
@@ -651,7 +651,7 @@ def bench(opts):
 
 
 def main(argv):
-    p = argparse.ArgumentParser(description="COLMAP baseline for the hawor SLAM benchmark (issue 4).")
+    p = argparse.ArgumentParser(description="COLMAP baseline for the hawor SLAM benchmark.")
     p.add_argument("seq_dir", nargs="?", help="sequence written by 'hawor synth'")
     p.add_argument("--masked", action="store_true", help="ignore features on hand pixels (DIR/mask)")
     p.add_argument("--frames", type=int, default=None, help="use the first N frames (default: all)")

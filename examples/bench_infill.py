@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Infiller benchmark (issue 6): the paper's infiller ablation table in form, on synthetic hands.
+"""Infiller benchmark: the paper's infiller ablation table in form, on synthetic hands.
 
 For each preset and seed, `hawor synth` makes a sequence (only hands_gt.npz is used: world-space
 MANO-style parameters and the 21 keypoints of both hands, every frame, with the frames where the
@@ -257,7 +257,7 @@ def main():
     for name, _ in methods:
         print("%-16s" % name + "".join("%11.2f" % tallies[name].mean(b) for b, _ in buckets))
     targets = {"w_mpjpe": 0.9, "accel": 0.7}
-    print("\nTargets (issue 6): spline <= 0.9 x LERP W-MPJPE: %.3f %s; spline <= 0.7 x LERP Accel: %.3f %s"
+    print("\nTargets: spline <= 0.9 x LERP W-MPJPE: %.3f %s; spline <= 0.7 x LERP Accel: %.3f %s"
           % (ratio["w_mpjpe"], "PASS" if ratio["w_mpjpe"] <= targets["w_mpjpe"] else "FAIL",
              ratio["accel"], "PASS" if ratio["accel"] <= targets["accel"] else "FAIL"))
     print("(Accel-in, the joins excluded: %.3f)" % ratio["accel_in"])

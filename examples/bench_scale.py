@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The metric-scale benchmark of issue 5 on the synthetic presets.
+"""The metric-scale benchmark on the synthetic presets.
 
 For every preset (sequences and SLAM outputs of examples/bench_slam.py, made here when missing),
 repeated for --repeats independent draws of the corruption:
@@ -26,7 +26,7 @@ the ground truth (the per-preset figure is the median over the draws). ATE-S: th
 scaled trajectory after a rigid (SE(3)) alignment, next to the Sim(3) ATE (docs/design.md §8).
 Presets whose camera path is under 0.1 m (pure_rotation) have no observable trajectory scale, and
 a SLAM trajectory whose ATE exceeds 5 % of the path has no single scale (fast_turns): both are
-listed apart; the hand-anchored figure is over presets with >= 0.5 m of camera path (issue 5).
+listed apart; the hand-anchored figure is over presets with >= 0.5 m of camera path.
 
   bench_scale.py [--presets a,b] [--work DIR] [--hawor PATH] [--seed N] [--repeats N] [--json OUT]
 """

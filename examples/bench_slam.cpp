@@ -1,4 +1,4 @@
-// bench_slam — the SLAM benchmark of issue 4: every synthetic preset with and without the dual
+// bench_slam — the SLAM benchmark: every synthetic preset with and without the dual
 // hand masking, one table: ATE (Sim(3)-aligned mean error, metres and % of the ground-truth path
 // length), camera rotation error (degrees, mean and max after the best global rotation; defined
 // also for near-pure rotation, where the positions carry no measurable motion), ms per frame

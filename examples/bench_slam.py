@@ -1,12 +1,12 @@
 #!/usr/bin/python3
-"""The SLAM benchmark table of issue 4, from files on disk, with COLMAP beside it.
+"""The SLAM benchmark table, from files on disk, with COLMAP beside it.
 
 For every preset: `hawor synth` writes the sequence (640x480 by default; reused when the folder
 exists), `hawor slam` runs on it with the hand masks and without (--no-mask), and COLMAP
 (examples/bench_colmap.py: sequential matching, intrinsics fixed) runs on the same frames. One
 table: ATE (docs/design.md §8: mean error after Sim(3) alignment; RMSE beside it) in metres and in %
 of the ground-truth path, ms per frame (median and p95 of the SLAM's per-frame time; COLMAP: its
-total wall time / frames), keyframes, losses and frame statuses; then the issue's ratios:
+total wall time / frames), keyframes, losses and frame statuses; then the target ratios:
 masked / unmasked ATE over the presets where the hands cover >= 30 % of the image on >= 10 % of
 the frames, ours / COLMAP ATE and COLMAP / ours time.
 

@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""Issue 4's SLAM numbers over many seeds: runs bench_slam once per seed and summarises.
+"""The SLAM benchmark's numbers over many seeds: runs bench_slam once per seed and summarises.
 
 One bench_slam run renders every preset of one seed in memory and tracks it with and without the
 hand masks (examples/bench_slam.cpp). A single seed says little: the front end's choices (which
-frames start a map, where a fast turn loses its tracks) flip with small changes, so the issue's
+frames start a map, where a fast turn loses its tracks) flip with small changes, so the targets'
 figures are read over seeds. This script runs `bench_slam --seed N --json F` for each seed (in
 `--jobs` processes; ms per frame is then measured under that load), keeps each seed's JSON in
 `--work` (reused unless `--fresh`, so an interrupted run resumes) and prints:
@@ -183,11 +183,11 @@ def main(argv):
     print("ms per frame (median of each run's median, %d runs, %d bench_slam process(es) at a time): median %.2f, "
           "p95 %.2f; largest stored sequence %.1f MB" % (len(ms), a.jobs, median(ms), np.percentile(ms, 95), mb))
     worst = max(presets, key=lambda p: summary["presets"][p]["median_ate_pct"]["masked"])
-    print("issue 4, ATE <= 1 %% of the path (median over seeds, masked) on every preset: %s (highest: %s %.2f %%)"
+    print("target: ATE <= 1 %% of the path (median over seeds, masked) on every preset: %s (highest: %s %.2f %%)"
           % (all(summary["presets"][p]["median_ate_pct"]["masked"] <= 1.0 for p in presets), worst,
              summary["presets"][worst]["median_ate_pct"]["masked"]))
     if covered:
-        print("issue 4, masked <= 0.8 x unmasked (ratio of the means): %s (%.2f)"
+        print("target: masked <= 0.8 x unmasked (ratio of the means): %s (%.2f)"
               % (summary["masked_over_unmasked"]["ratio_of_means"] <= 0.8,
                  summary["masked_over_unmasked"]["ratio_of_means"]))
     if failed:

@@ -1,4 +1,4 @@
-"""`hawor synth`: the output layout of issue 4 (rgb/ mask/ depth/ PNG and npy files, camera_gt.tum,
+"""`hawor synth`: the output layout (rgb/ mask/ depth/ PNG and npy files, camera_gt.tum,
 hands_gt.npz, intrinsics.txt), shapes and dtypes read back with numpy and an independent PNG decoder
 (zlib + the PNG filters, no imaging library), ground-truth consistency (keypoints in camera and
 world frames against the TUM poses, projections of joints_cam with the intrinsics against the mask,

@@ -1,4 +1,4 @@
-// Issue 7's figure: on the kitchen clip both hands are found on >= 80 % of the (by-eye labelled,
+// The perception target: on the kitchen clip both hands are found on >= 80 % of the (by-eye labelled,
 // tests/data/kitchen_hands_visible.json) frames where each is visible, with the right side. One
 // tracker + side-assignment run (the pipeline's defaults) at 960x540 to keep it under ~40 s; the
 // full-resolution figures come from `node web/tools/eval_kitchen_hands.mjs`.

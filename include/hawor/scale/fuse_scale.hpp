@@ -1,4 +1,4 @@
-// hawor/scale/fuse_scale.hpp — one metric scale from several estimates (issue 5, item 3): the
+// hawor/scale/fuse_scale.hpp — one metric scale from several estimates: the
 // depth-based (robust_scale.hpp), the hand-anchored (hand_scale.hpp), the ground-plane
 // (ground_scale.hpp) one. A single estimate is the answer; several give the confidence-weighted
 // mean in log space, log α = Σ c_k·log α_k / Σ c_k (scales multiply, so they average in log

@@ -1,6 +1,6 @@
 // hawor/scale/hand_scale.hpp — the hand-anchored metric scale: no depth network, only the hands.
 // A fitted hand has a metric size, so its camera-frame position h_t is in metres, and the world
-// hand R_t·h_t + α·c_t depends on the unknown scale α of the SLAM trajectory linearly (issue 5).
+// hand R_t·h_t + α·c_t depends on the unknown scale α of the SLAM trajectory linearly.
 // Two cues, in order of trust:
 //   holds       a hand still in the world while the head moves (hand_hold_scale.hpp): α makes
 //               the most windows still; exact when the hand really holds still;

@@ -1,4 +1,4 @@
-// hawor/scale/scale.hpp — metric scale of the monocular trajectory (issue 5, docs/design.md §6): the
+// hawor/scale/scale.hpp — metric scale of the monocular trajectory (docs/design.md §6): the
 // official adaptive-sampling Geman–McClure fit on metric depth (and its plain-median baseline),
 // the two scales that need no depth network — hand-anchored (holds, then smoothness) and ground-plane
 // (the cameras' height above the floor) — and their fusion.

@@ -1,6 +1,6 @@
 // hawor/synth/presets.hpp — the named synthetic sequences (`hawor synth --preset NAME`): a camera
 // motion of trajectory.hpp, a hand behaviour of hand_motion.hpp, a default length and the pixel
-// noise. The five presets of the SLAM benchmark (issue 4):
+// noise. The five presets of the SLAM benchmark:
 //   walk           walking through the room, hands now and then in view
 //   table_work     standing at the table looking down while the hands work
 //   fast_turns     standing, turning the head fast (hands trail and leave the view)

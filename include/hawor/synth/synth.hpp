@@ -1,4 +1,4 @@
-// hawor/synth/synth.hpp — synthetic egocentric sequences with ground truth (issue 4, part 1):
+// hawor/synth/synth.hpp — synthetic egocentric sequences with ground truth:
 // procedural textures → indoor scene → head-like camera paths → hand rig and hand motion →
 // renderer → presets → sequence → PNG / npy / npz / TUM writer.
 #pragma once

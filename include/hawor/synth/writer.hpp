@@ -1,4 +1,4 @@
-// hawor/synth/writer.hpp — writes a SynthSequence to disk in the layout of issue 4:
+// hawor/synth/writer.hpp — writes a SynthSequence to disk in this layout:
 //
 //   DIR/rgb/000000.png …     RGB, 8 bit
 //   DIR/mask/000000.png …    grey, 8 bit: 0 background, 128 left hand, 255 right hand (non-zero =
