@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job on the built-in default: builds everything (the native hawor CLI and default hands,
 # the WebAssembly core, the synthetic sample clip: scripts/build_web.sh), runs the whole pipeline
-# headless on the sample (node web/cli.mjs run -> hawor-demo/: world.npz, camera.tum,
+# headless on the sample (node web/cli.mjs run --sample -> hawor-demo/: world.npz, camera.tum,
 # hands_cam.npz, result.json), then serves the browser app on http://127.0.0.1:${PORT:-8080}/
 # (Ctrl-C stops it). HAWOR_NO_SERVE=1 stops after the headless run.
 set -euo pipefail
@@ -11,9 +11,10 @@ source scripts/native_compiler.sh
 [[ -f build/native/CMakeCache.txt ]] || env $(native_compiler_env) cmake -S . -B build/native -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build/native --target hawor_cli default_hands -j"$(nproc)" >/dev/null
 bash scripts/build_web.sh
-fx=$(node -e 'console.log(JSON.parse(require("fs").readFileSync("build/web/sample.json","utf8")).fx)')
-echo "[demo] node web/cli.mjs run build/web/sample.webm --out hawor-demo --focal $fx" >&2
-node web/cli.mjs run build/web/sample.webm --out hawor-demo --focal "$fx"
+# --sample: the built-in synthetic clip with its true focal (sample.json); `npx hawor run --sample`
+# in an installed package.
+echo "[demo] node web/cli.mjs run --sample --out hawor-demo" >&2
+node web/cli.mjs run --sample --out hawor-demo
 if [[ "${HAWOR_NO_SERVE:-0}" != 1 ]]; then
   exec node web/server.mjs --port "${PORT:-8080}" --host "${HOST:-127.0.0.1}"
 fi

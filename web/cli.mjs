@@ -2,10 +2,14 @@
 // cli.mjs: the headless hawor pipeline on a video file (node glue only: arguments, ffmpeg
 // decoding, progress, files; every algorithm is in web/src/pipeline/run.mjs and the C++ core).
 //
-//   node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR]
+//   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale]
+//   (`hawor` is the npm package's bin; in a checkout: node web/cli.mjs ...)
+//
+// --sample runs the built-in synthetic sample (sample.webm, 60 frames of a table scene) with its
+// true focal from sample.json (unless --focal or --fov is given).
 //
 // Writes DIR/world.npz, DIR/hands_cam.npz, DIR/camera.tum and DIR/result.json (exports.mjs
 // describes them), prints a progress bar and a per-stage timing table on stderr and one JSON
@@ -14,23 +18,28 @@
 // stderr). Exit codes: 2 usage error, 1 bad input (the message names it), 0 success (also when
 // no hand was found: result.json says "noHands": true).
 //
-// Defaults: the core from $HAWOR_CORE or build/wasm/wasm/hawor_core.mjs; hand models from
-// --mano DIR (MANO_LEFT/RIGHT .pkl or .npz), else $HAWOR_HAND_DIR or build/native/models
-// (hand_{left,right}.npz), else the WebXR glTF hands in node_modules; perception networks from
-// web/models (scripts/install.sh converts them).
+// Defaults: the core from $HAWOR_CORE, else dist/ (installed package) or build/wasm/wasm
+// (checkout), found by src/core.mjs's builtFile, which also finds the sample (dist/ or
+// build/web); hand models from --mano DIR (MANO_LEFT/RIGHT .pkl or .npz), else $HAWOR_HAND_DIR or
+// build/native/models (hand_{left,right}.npz), else the WebXR glTF hands of the installed
+// @webxr-input-profiles/assets; perception networks from web/models (converted at install; when
+// missing there, e.g. after npm install --ignore-scripts, they are converted on the spot).
 
 import { spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdirSync, readFileSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, readFileSync, realpathSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
+import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
-import { fileURLToPath, pathToFileURL } from 'node:url';
+import { fileURLToPath } from 'node:url';
+import { builtFile, loadCore as loadCoreModule } from './src/core.mjs';
 import { runPipeline, MAX_PIXELS } from './src/pipeline/run.mjs';
 import { eyeHeightError } from './src/pipeline/eye_height.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
-const USAGE = 'usage: node web/cli.mjs run VIDEO --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
+const defaultModels = join(here, 'models');
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -38,7 +47,7 @@ const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
 export function parseArgs(argv) {
   if (argv[0] === '--help' || argv[0] === '-h') return { help: true };
   if (argv[0] !== 'run') throw usage(argv.length ? `unknown command '${argv[0]}'` : 'missing command');
-  const o = { model: 'lite', threads: 2, infill: 'spline', models: join(repo, 'web', 'models') };
+  const o = { model: 'lite', threads: 2, infill: 'spline' };
   const num = (v, name, min) => {
     const n = Number(v);
     if (!Number.isFinite(n) || n <= min) throw usage(`${name} must be a number > ${min}, not '${v}'`);
@@ -48,6 +57,7 @@ export function parseArgs(argv) {
     const a = argv[i];
     const next = () => { if (i + 1 >= argv.length) throw usage(`${a} needs a value`); return argv[++i]; };
     if (a === '--out') o.out = next();
+    else if (a === '--sample') o.sample = true;
     else if (a === '--focal') o.focalPx = num(next(), '--focal', 0);
     else if (a === '--fov') { o.fovDeg = num(next(), '--fov', 1); if (o.fovDeg >= 179) throw usage('--fov must be below 179 degrees'); }
     else if (a === '--no-refine-focal') o.refineFocal = false;
@@ -67,7 +77,8 @@ export function parseArgs(argv) {
     else if (!o.video) o.video = a;
     else throw usage(`unexpected argument '${a}'`);
   }
-  if (!o.video) throw usage('missing VIDEO');
+  if (o.sample && o.video) throw usage('give VIDEO or --sample, not both');
+  if (!o.video && !o.sample) throw usage('missing VIDEO (or --sample)');
   if (!o.out) throw usage('--out DIR is required');
   if (o.focalPx !== undefined && o.fovDeg !== undefined) throw usage('give --focal or --fov, not both');
   if (o.depthConfig && !o.depthModel) throw usage('--depth-config needs --depth-model');
@@ -134,17 +145,22 @@ export async function* decodeFrames(video, width, height, scaleTo, maxFrames, ti
   if (code !== 0 && err.trim()) throw fail(`ffmpeg: ${err.trim().split('\n').pop()}`);
 }
 
+/** The core's module (src/core.mjs; a missing file is a bad-input error, exit code 1). */
 export async function loadCore(path) {
-  if (!existsSync(path)) throw fail(`${path}: the WebAssembly core is missing (emcmake cmake -S . -B build/wasm && cmake --build build/wasm --target hawor_core), or give --core`);
-  globalThis.require ??= createRequire(import.meta.url);
-  globalThis.__dirname = dirname(resolve(path));
-  const { default: create } = await import(pathToFileURL(resolve(path)).href);
-  const dir = dirname(resolve(path));
-  // The .wasm bytes are handed over directly: node 20's fetch cannot read file paths (otherwise
-  // node would need --no-experimental-fetch, DESIGN §9).
-  const wasm = join(dir, 'hawor_core.wasm');
-  if (!existsSync(wasm)) throw fail(`${wasm}: missing next to the core`);
-  return create({ locateFile: (f) => join(dir, f), wasmBinary: readFileSync(wasm) });
+  try {
+    return await loadCoreModule(path ? { path } : {});
+  } catch (e) {
+    throw fail(`${e.message}${path ? '' : ' (or give --core)'}`);
+  }
+}
+
+/** The folder of an installed npm package as module resolution finds it from here, or null. */
+function packageDir(name) {
+  try {
+    return dirname(createRequire(import.meta.url).resolve(`${name}/package.json`));
+  } catch {
+    return null;
+  }
 }
 
 export function handModelFiles(o) {
@@ -163,9 +179,38 @@ export function handModelFiles(o) {
     const r = join(d, 'hand_right.npz');
     if (existsSync(l) && existsSync(r)) return { left: l, right: r };
   }
-  const glb = join(repo, 'node_modules', '@webxr-input-profiles', 'assets', 'dist', 'profiles', 'generic-hand');
-  if (existsSync(join(glb, 'left.glb')) && existsSync(join(glb, 'right.glb'))) return { left: join(glb, 'left.glb'), right: join(glb, 'right.glb') };
-  throw fail('no hand model: give --mano DIR, set HAWOR_HAND_DIR, or build the default hands (cmake --build build/native --target default_hands)');
+  const assets = packageDir('@webxr-input-profiles/assets');
+  const glb = assets && join(assets, 'dist', 'profiles', 'generic-hand');
+  if (glb && existsSync(join(glb, 'left.glb')) && existsSync(join(glb, 'right.glb'))) return { left: join(glb, 'left.glb'), right: join(glb, 'right.glb') };
+  throw fail('no hand model: give --mano DIR, set HAWOR_HAND_DIR, or install the default hand (npm install @webxr-input-profiles/assets)');
+}
+
+/** The perception networks' folder: --models DIR as given, else web/models, converted from
+ *  @mediapipe/hands first when missing (< 1 s; into the temporary folder if web/models is not
+ *  writable). */
+async function modelsDir(o) {
+  const names = [`palm_detection_${o.model}.onnx`, `hand_landmark_${o.model}.onnx`];
+  const has = (d) => names.every((n) => existsSync(join(d, n)));
+  if (o.models) {
+    for (const n of names) if (!existsSync(join(o.models, n))) throw fail(`${join(o.models, n)}: missing (node web/tools/convert_mediapipe.mjs --out DIR converts the models)`);
+    return o.models;
+  }
+  if (has(defaultModels)) return defaultModels;
+  const { ensureMediapipeModels, MEDIAPIPE_HANDS_VERSION } = await import('./tools/convert_mediapipe.mjs');
+  const fallback = join(tmpdir(), `hawor-models-${MEDIAPIPE_HANDS_VERSION}`);
+  if (has(fallback)) return fallback;
+  let lastError = null;
+  for (const dir of [defaultModels, fallback]) {
+    try {
+      const r = ensureMediapipeModels(dir);
+      process.stderr.write(`hawor: converted MediaPipe's hand networks to ONNX in ${dir} (${r.ms} ms; once)\n`);
+      return dir;
+    } catch (e) {
+      lastError = e;
+      if (!['EACCES', 'EPERM', 'EROFS'].includes(e.code)) break;
+    }
+  }
+  throw fail(`the hand networks are missing (${defaultModels}) and could not be converted: ${lastError.message}`);
 }
 
 function progressBar(total) {
@@ -203,13 +248,29 @@ function timingTable(timings, frames) {
   return lines.join('\n');
 }
 
+/** --sample: the built-in synthetic clip and, unless given, its true focal (sample.json). */
+async function useSample(o) {
+  const video = await builtFile('sample.webm');
+  const meta = await builtFile('sample.json');
+  if (!video || !meta) throw fail('the built-in sample is missing (dist/ or build/web/sample.webm + sample.json): run scripts/build_web.sh in a checkout');
+  let info;
+  try { info = JSON.parse(readFileSync(meta, 'utf8')); } catch (e) { throw fail(`${meta}: ${e.message}`); }
+  o.video = video;
+  if (o.focalPx === undefined && o.fovDeg === undefined) {
+    if (!(info.fx > 0)) throw fail(`${meta}: no focal length (fx)`);
+    o.focalPx = info.fx;
+  }
+  process.stderr.write(`hawor: the built-in sample ${video} (${info.preset ?? 'synthetic'}, focal ${o.focalPx} px)\n`);
+}
+
 export async function main(argv) {
   const o = parseArgs(argv);
   if (o.help) { process.stdout.write(`${USAGE}\n`); return 0; }
+  if (o.sample) await useSample(o);
   if (!existsSync(o.video)) throw fail(`${o.video}: no such file`);
-  const palm = join(o.models, `palm_detection_${o.model}.onnx`);
-  const lm = join(o.models, `hand_landmark_${o.model}.onnx`);
-  for (const f of [palm, lm]) if (!existsSync(f)) throw fail(`${f}: missing (scripts/install.sh converts the models)`);
+  const models = await modelsDir(o);
+  const palm = join(models, `palm_detection_${o.model}.onnx`);
+  const lm = join(models, `hand_landmark_${o.model}.onnx`);
   const depthConfig = o.depthModel ? o.depthConfig ?? o.depthModel.replace(/\.onnx$/i, '.json') : null;
   if (o.depthModel && !existsSync(o.depthModel)) throw fail(`${o.depthModel}: no such file`);
   if (o.depthModel && !existsSync(depthConfig)) throw fail(`${depthConfig}: the depth model's config is missing (give --depth-config)`);
@@ -227,7 +288,7 @@ export async function main(argv) {
   let depthModel;
   if (o.depthModel) depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(depthConfig, 'utf8') };
   const tLoad = performance.now();
-  const core = await loadCore(o.core ?? process.env.HAWOR_CORE ?? join(repo, 'build', 'wasm', 'wasm', 'hawor_core.mjs'));
+  const core = await loadCore(o.core ?? process.env.HAWOR_CORE);
   const ort = await import('onnxruntime-web');
   ort.env.wasm.numThreads = o.threads;
   ort.env.logLevel = 'error';
@@ -269,7 +330,9 @@ export async function main(argv) {
   return 0;
 }
 
-if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
+// Run as a program: also through npm's bin link (node_modules/.bin/hawor), hence realpath.
+const invoked = (() => { try { return process.argv[1] && realpathSync(process.argv[1]); } catch { return null; } })();
+if (invoked === fileURLToPath(import.meta.url)) {
   main(process.argv.slice(2)).then((c) => { process.exitCode = c; }, (e) => {
     process.stderr.write(`hawor: ${e.message}\n`);
     process.exitCode = e.exitCode ?? 1;

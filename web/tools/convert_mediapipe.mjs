@@ -1,8 +1,12 @@
 // convert_mediapipe.mjs: the install step that turns MediaPipe's hand networks (npm
 // @mediapipe/hands, Apache-2.0) into ONNX files for onnxruntime-web. Nothing it writes is
-// committed (web/models/ is ignored); scripts/install.sh runs it on every fresh machine.
+// committed (web/models/ is ignored); scripts/install.sh runs it on every fresh machine, and the
+// npm package's postinstall (--postinstall: a failure only warns, the CLI converts at run time).
 //
-//   node web/tools/convert_mediapipe.mjs [--package DIR] [--out DIR] [--fp32]
+//   node web/tools/convert_mediapipe.mjs [--package DIR] [--out DIR] [--fp32] [--postinstall]
+//
+// @mediapipe/hands is found by node's module resolution from this file (in an installed package
+// npm hoists it into the consumer's node_modules, beside this package).
 //
 // The hand landmark models ship as files; the palm detectors are packed into
 // hands_solution_packed_assets.data, whose loader script lists each file's byte range. The
@@ -15,6 +19,7 @@
 import { readFileSync, writeFileSync, mkdirSync, existsSync } from 'node:fs';
 import { createHash } from 'node:crypto';
 import { dirname, join, resolve } from 'node:path';
+import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
 import { readTflite } from './tflite_reader.mjs';
 import { tfliteToOnnx } from './tflite_to_onnx.mjs';
@@ -23,7 +28,17 @@ export const MEDIAPIPE_HANDS_VERSION = '0.4.1675469240';
 export const MODEL_NAMES = ['palm_detection_full', 'palm_detection_lite', 'hand_landmark_full', 'hand_landmark_lite'];
 
 const here = dirname(fileURLToPath(import.meta.url));
-export const defaultPackageDir = resolve(here, '../../node_modules/@mediapipe/hands');
+
+/** The folder of the installed @mediapipe/hands as module resolution finds it, or null. */
+export function findMediapipeHands() {
+  try {
+    return dirname(createRequire(import.meta.url).resolve('@mediapipe/hands/package.json'));
+  } catch {
+    return null;
+  }
+}
+
+export const defaultPackageDir = findMediapipeHands() ?? resolve(here, '../../node_modules/@mediapipe/hands');
 export const defaultModelsDir = resolve(here, '../models');
 
 const PACKED = 'hands_solution_packed_assets.data';
@@ -46,7 +61,7 @@ function checkTflite(bytes, what) {
 /** The four .tflite files of the package as Uint8Arrays, keyed by MODEL_NAMES. */
 export function extractMediapipeModels(pkgDir = defaultPackageDir) {
   const pj = join(pkgDir, 'package.json');
-  if (!existsSync(pj)) throw new Error(`${pkgDir}: @mediapipe/hands is not installed (run scripts/install.sh)`);
+  if (!existsSync(pj)) throw new Error(`${pkgDir}: @mediapipe/hands is not installed (npm install @mediapipe/hands@${MEDIAPIPE_HANDS_VERSION}, or scripts/install.sh in a checkout)`);
   const version = JSON.parse(readFileSync(pj, 'utf8')).version;
   if (version !== MEDIAPIPE_HANDS_VERSION) {
     throw new Error(`${pkgDir}: @mediapipe/hands ${version}, but the converter is checked against ${MEDIAPIPE_HANDS_VERSION}`);
@@ -83,15 +98,25 @@ export function convertMediapipe({ pkgDir = defaultPackageDir, outDir = defaultM
   return manifest;
 }
 
+/** The four .onnx files in outDir, converted first when any is missing: {converted, ms}. */
+export function ensureMediapipeModels(outDir = defaultModelsDir, pkgDir = defaultPackageDir) {
+  if (MODEL_NAMES.every((n) => existsSync(join(outDir, `${n}.onnx`)))) return { converted: false, ms: 0 };
+  const t0 = Date.now();
+  convertMediapipe({ pkgDir, outDir });
+  return { converted: true, ms: Date.now() - t0 };
+}
+
 function main(argv) {
   const opts = {};
+  let postinstall = false;
   for (let i = 0; i < argv.length; ++i) {
     const a = argv[i];
     if (a === '--package') opts.pkgDir = resolve(argv[++i] ?? '');
     else if (a === '--out') opts.outDir = resolve(argv[++i] ?? '');
     else if (a === '--fp32') opts.weights = 'float32';
+    else if (a === '--postinstall') postinstall = true;
     else {
-      process.stderr.write(`convert_mediapipe: unknown argument '${a}'\nusage: node web/tools/convert_mediapipe.mjs [--package DIR] [--out DIR] [--fp32]\n`);
+      process.stderr.write(`convert_mediapipe: unknown argument '${a}'\nusage: node web/tools/convert_mediapipe.mjs [--package DIR] [--out DIR] [--fp32] [--postinstall]\n`);
       return 2;
     }
   }
@@ -102,6 +127,11 @@ function main(argv) {
     process.stderr.write(`[convert_mediapipe] ${m.source} -> ${opts.outDir ?? defaultModelsDir} (${sizes}; ${Date.now() - t0} ms)\n`);
     return 0;
   } catch (e) {
+    // A failed postinstall would abort the user's whole npm install; the CLI retries at run time.
+    if (postinstall) {
+      process.stderr.write(`hawor postinstall: the hand networks were not converted (hawor converts them on its first run): ${e.message}\n`);
+      return 0;
+    }
     process.stderr.write(`convert_mediapipe: ${e.message}\n`);
     return 1;
   }
