@@ -3,15 +3,19 @@
 //
 //   node web/server.mjs [--port 8080] [--host 127.0.0.1] [--root DIR]
 //
-// Serves the page and exactly the files it needs, each from where the build leaves it:
-//   /                 web/app/index.html
-//   /app/...          web/app/            the page, its modules and the Web Worker
-//   /src/...          web/src/            the shared JavaScript (perception, pipeline, exports)
-//   /tools/...        web/tools/          shared helpers the exports import (npz.mjs)
-//   /models/...       web/models/         the ONNX hand networks converted at install
-//   /core/...         build/wasm/wasm/    hawor_core.mjs + hawor_core.wasm
-//   /assets/...       build/web/          the default hand models and the synthetic sample
-//   /node_modules/three/..., /node_modules/onnxruntime-web/...   the two npm runtimes the page loads
+// Serves the page and exactly the files it needs. URLs follow the npm package's own layout, so
+// the app's relative imports (and index.html's import map) also work from any static host of an
+// installed package; only /dist/ and /node_modules/ are looked up:
+//   /                 redirects to /web/app/ (index.html)
+//   /web/app/...      web/app/            the page, its modules and the Web Worker
+//   /web/src/...      web/src/            the shared JavaScript (core loader, perception, pipeline, exports)
+//   /web/tools/...    web/tools/          shared helpers the exports import (npz.mjs)
+//   /web/models/...   web/models/         the ONNX hand networks converted at install
+//   /dist/...         dist/ (installed package), else build/wasm/wasm/ and build/web/ (checkout):
+//                     hawor_core.mjs + .wasm, the synthetic sample
+//   /node_modules/{three,onnxruntime-web,@webxr-input-profiles/assets}/...   the npm packages the
+//                     page loads (three.js, onnxruntime-web, the default hand), found by node's
+//                     module resolution from ROOT (hoisted beside an installed package)
 // Every response carries Cross-Origin-Opener-Policy: same-origin and
 // Cross-Origin-Embedder-Policy: require-corp (cross-origin isolation: SharedArrayBuffer, so
 // onnxruntime-web can use threads) and Cross-Origin-Resource-Policy: same-origin. Nothing is
@@ -20,6 +24,7 @@
 import http from 'node:http';
 import fs from 'node:fs';
 import path from 'node:path';
+import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -43,31 +48,56 @@ export const MIME = {
   '.map': 'application/json; charset=utf-8',
 };
 
-/// URL prefix -> folder (relative to the repository root).
-export function routes(root) {
-  return [
-    ['/app/', path.join(root, 'web/app')],
-    ['/src/', path.join(root, 'web/src')],
-    ['/tools/', path.join(root, 'web/tools')],
-    ['/models/', path.join(root, 'web/models')],
-    ['/core/', path.join(root, 'build/wasm/wasm')],
-    ['/assets/', path.join(root, 'build/web')],
-    ['/node_modules/three/', path.join(root, 'node_modules/three')],
-    ['/node_modules/onnxruntime-web/', path.join(root, 'node_modules/onnxruntime-web')],
-  ];
+/// The npm packages the page loads (index.html's import map names the same URLs).
+export const PACKAGES = ['three', 'onnxruntime-web', '@webxr-input-profiles/assets'];
+
+/// An npm package's folder as node resolves it from `root` (a package whose exports hide
+/// package.json is found from its entry point), or ROOT/node_modules/NAME when not resolvable.
+export function packageRoot(root, name) {
+  const req = createRequire(path.join(root, 'package.json'));
+  try { return path.dirname(req.resolve(`${name}/package.json`)); } catch { /* not exported */ }
+  try {
+    for (let d = path.dirname(req.resolve(name)); d !== path.dirname(d); d = path.dirname(d)) {
+      const pj = path.join(d, 'package.json');
+      if (fs.existsSync(pj) && JSON.parse(fs.readFileSync(pj, 'utf8')).name === name) return d;
+    }
+  } catch { /* not installed */ }
+  return path.join(root, 'node_modules', name);
 }
 
-/// The file a URL path names, or null (outside every route, `..`, or not a plain file).
+const routeCache = new Map();
+/// URL prefix -> folders tried in order (absolute).
+export function routes(root) {
+  if (!routeCache.has(root)) {
+    routeCache.set(root, [
+      ['/web/app/', [path.join(root, 'web/app')]],
+      ['/web/src/', [path.join(root, 'web/src')]],
+      ['/web/tools/', [path.join(root, 'web/tools')]],
+      ['/web/models/', [path.join(root, 'web/models')]],
+      ['/dist/', ['dist', 'build/wasm/wasm', 'build/web'].map((d) => path.join(root, d))],
+      ...PACKAGES.map((name) => [`/node_modules/${name}/`, [packageRoot(root, name)]]),
+    ]);
+  }
+  return routeCache.get(root);
+}
+
+/// The file a URL path names, or null (outside every route, `..`, or not a plain file). Of a
+/// route with several folders, the first that holds the file.
 export function resolvePath(root, urlPath) {
   let p;
   try { p = decodeURIComponent(urlPath); } catch { return null; }
   if (p.includes('\0')) return null;
-  if (p === '/' || p === '/index.html') return path.join(root, 'web/app/index.html');
-  for (const [prefix, dir] of routes(root)) {
+  if (p === '/web/app/') p = '/web/app/index.html';
+  for (const [prefix, dirs] of routes(root)) {
     if (!p.startsWith(prefix)) continue;
-    const file = path.resolve(dir, '.' + p.slice(prefix.length - 1));
-    if (file !== dir && !file.startsWith(dir + path.sep)) return null;
-    return file;
+    let first = null;
+    for (const dir of dirs) {
+      const file = path.resolve(dir, '.' + p.slice(prefix.length - 1));
+      if (file !== dir && !file.startsWith(dir + path.sep)) return null;
+      if (fs.existsSync(file)) return file;
+      first ??= file;
+    }
+    return first;
   }
   return null;
 }
@@ -90,6 +120,10 @@ export function createServer(root) {
   return http.createServer((req, res) => {
     if (req.method !== 'GET' && req.method !== 'HEAD') return send(res, 405, 'method not allowed\n');
     const urlPath = new URL(req.url, 'http://x').pathname;
+    if (urlPath === '/' || urlPath === '/index.html' || urlPath === '/web/app') {
+      res.writeHead(302, { Location: '/web/app/', 'Content-Length': 0, ...isolationHeaders() });
+      return res.end();
+    }
     const file = resolvePath(root, urlPath);
     if (!file) return send(res, 404, `not found: ${urlPath}\n`);
     fs.stat(file, (err, st) => {
@@ -126,7 +160,7 @@ function parseArgs(argv) {
     else if (a === '--host') { o.host = v; i++; }
     else if (a === '--root') { o.root = path.resolve(v); i++; }
     else if (a === '--help' || a === '-h') {
-      console.log('usage: node web/server.mjs [--port N (0: any free)] [--host H] [--root REPO]');
+      console.log('usage: node web/server.mjs [--port N (0: any free)] [--host H] [--root DIR (the checkout or the installed package)]');
       process.exit(0);
     } else { console.error(`server: unknown argument ${a}`); process.exit(2); }
   }
@@ -134,8 +168,21 @@ function parseArgs(argv) {
   return o;
 }
 
-if (process.argv[1] && path.resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
+/// The hand networks the page fetches: converted first when missing (an install without scripts).
+async function ensureModels(root) {
+  const dir = path.join(root, 'web/models');
+  try {
+    const { ensureMediapipeModels } = await import('./tools/convert_mediapipe.mjs');
+    if (ensureMediapipeModels(dir).converted) console.error(`server: converted MediaPipe's hand networks into ${dir}`);
+  } catch (e) {
+    console.error(`server: warning: the hand networks are missing in ${dir} and could not be converted (${e.message}); the page will say so`);
+  }
+}
+
+const invoked = (() => { try { return process.argv[1] && fs.realpathSync(process.argv[1]); } catch { return null; } })();
+if (invoked === fileURLToPath(import.meta.url)) {
   const o = parseArgs(process.argv.slice(2));
+  await ensureModels(o.root);
   const server = createServer(o.root);
   server.on('error', (e) => { console.error(`server: ${e.message}`); process.exit(1); });
   server.listen(o.port, o.host, () => {

@@ -2,7 +2,8 @@
 // /usr/bin/chromium, docs/design.md §9): page load and cross-origin isolation, the error messages (corrupt
 // file, huge resolution, clip too short, wrong MANO file), cancel, the synthetic sample and the
 // real clip (../shared/data/egocentric_kitchen.mp4, its first HAWOR_KITCHEN_FRAMES frames, default
-// 40, at 640 px; skipped with a message when absent) through the file input, the 3D scene, every
+// 40, at 640 px; skipped with a message when absent) through the file input, the stage list (every
+// stage done after a run), the 3D scene, every
 // export (npz read by numpy, GLB by three's GLTFLoader and the Khronos validator, JSON, TUM), and a
 // console free of errors. Screenshots, exports and timings go to build/browser-test/.
 //
@@ -26,7 +27,7 @@ const FLAGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', 
   '--disable-background-networking', '--disable-component-update', '--disable-sync'];
 
 const needed = ['build/wasm/wasm/hawor_core.mjs', 'build/wasm/wasm/hawor_core.wasm', 'build/web/sample.webm',
-  'build/web/sample.json', 'build/web/hand_left.npz', 'build/web/hand_right.npz', 'web/models/palm_detection_lite.onnx',
+  'build/web/sample.json', 'node_modules/@webxr-input-profiles/assets/dist/profiles/generic-hand/left.glb', 'web/models/palm_detection_lite.onnx',
   'web/models/hand_landmark_lite.onnx'];
 const missing = needed.filter((f) => !existsSync(join(root, f)));
 const noChromium = !existsSync(CHROMIUM);
@@ -160,6 +161,20 @@ test('cancel stops a run; the next run starts cleanly', { skip }, async () => {
   assert.equal(await page.evaluate(() => window.haworApp.result), null);
 });
 
+/// After a finished run every listed stage is done: class 'done' and, where it counts, its full count.
+async function checkStagesDone(label) {
+  const stages = await page.$$eval('#stages li', (lis) => lis.map((li) => ({ cls: li.className, text: li.textContent })));
+  assert.ok(stages.length >= 4, `${label}: stages ${JSON.stringify(stages)}`);
+  for (const st of stages) {
+    assert.equal(st.cls, 'done', `${label}: ${JSON.stringify(st)}`);
+    const count = /(\d+)\/(\d+)/.exec(st.text);
+    if (count) assert.equal(count[1], count[2], `${label}: ${JSON.stringify(st)}`);
+  }
+  for (const name of ['decoding frames 60/60', 'frames 60/60', 'slam-finish 1/1', 'scale 1/1']) {
+    assert.ok(stages.some((st) => st.text.startsWith(name)), `${label}: no stage "${name}" in ${JSON.stringify(stages.map((st) => st.text))}`);
+  }
+}
+
 async function checkScene(T, label) {
   const s = await page.evaluate(() => window.haworApp.sceneSummary());
   assert.ok(s, `${label}: no scene`);
@@ -182,6 +197,7 @@ test('the synthetic sample: views, timeline and every export', { skip }, async (
   assert.equal(result.T, 60, 'all 60 frames of the sample');
   const s = await checkScene(60, 'sample');
   assert.ok(s.hands.left.frames > 0 && s.hands.right.frames > 0, `both hands of the sample: ${JSON.stringify(s.hands)}`);
+  await checkStagesDone('sample');
   assert.ok(s.points > 50, `SLAM points: ${s.points}`);
   // The timeline drives the views.
   await page.fill('#scrub', '30');
@@ -285,6 +301,8 @@ test('the real clip through the file input', { skip: skip || (!existsSync(KITCHE
   }
   await page.fill('#opt-eyeheight', '');
   await checkScene(KITCHEN_FRAMES, 'kitchen');
+  const kitchenStages = await page.$$eval('#stages li', (lis) => lis.map((li) => li.className));
+  assert.ok(kitchenStages.length > 0 && kitchenStages.every((c) => c === 'done'), `kitchen stages: ${kitchenStages}`);
   await page.evaluate(() => window.haworApp.view.setFrame(20));
   await page.waitForTimeout(300);
   await page.screenshot({ path: join(out, 'kitchen.png') });

@@ -5,17 +5,23 @@ import assert from 'node:assert/strict';
 import { mkdtempSync, mkdirSync, writeFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { createServer, resolvePath } from '../../web/server.mjs';
+import { createServer, resolvePath, packageRoot } from '../../web/server.mjs';
 import { buildGlb } from '../../web/src/export/gltf.mjs';
 
 function fakeRepo() {
   const root = mkdtempSync(join(tmpdir(), 'hawor-srv-'));
-  for (const d of ['web/app', 'web/src', 'web/models', 'build/wasm/wasm', 'build/web', 'node_modules/three/build', 'node_modules/secret']) mkdirSync(join(root, d), { recursive: true });
+  for (const d of ['web/app', 'web/src', 'web/models', 'build/wasm/wasm', 'build/web', 'dist', 'node_modules/three/build', 'node_modules/secret']) mkdirSync(join(root, d), { recursive: true });
   writeFileSync(join(root, 'web/app/index.html'), '<!doctype html>');
   writeFileSync(join(root, 'web/app/app.mjs'), 'export {}');
+  writeFileSync(join(root, 'web/cli.mjs'), 'no');
   writeFileSync(join(root, 'build/wasm/wasm/hawor_core.wasm'), Buffer.from([0, 97, 115, 109, 1, 0, 0, 0]));
   writeFileSync(join(root, 'build/web/sample.webm'), Buffer.from('0123456789'));
+  writeFileSync(join(root, 'build/web/sample.json'), '{"from": "build"}');
+  writeFileSync(join(root, 'dist/sample.json'), '{"from": "dist"}');
+  // three's exports hide its package.json: the server finds the folder from the entry point.
+  writeFileSync(join(root, 'node_modules/three/package.json'), JSON.stringify({ name: 'three', exports: { '.': { import: './build/three.module.js', require: './build/three.cjs' } } }));
   writeFileSync(join(root, 'node_modules/three/build/three.module.js'), 'export {}');
+  writeFileSync(join(root, 'node_modules/three/build/three.cjs'), '');
   writeFileSync(join(root, 'node_modules/secret/x.js'), 'no');
   writeFileSync(join(root, 'package.json'), '{}');
   return root;
@@ -27,12 +33,18 @@ test('server: isolation headers, MIME types, ranges, only the routed folders', a
   await new Promise((r) => server.listen(0, '127.0.0.1', r));
   const base = `http://127.0.0.1:${server.address().port}`;
   try {
+    const moved = await fetch(`${base}/`, { redirect: 'manual' });
+    assert.equal(moved.status, 302);
+    assert.equal(moved.headers.get('location'), '/web/app/');
+    await moved.text();
     const page = await fetch(`${base}/`);
     assert.equal(page.status, 200);
+    assert.equal(page.url, `${base}/web/app/`);
+    assert.equal(await page.text(), '<!doctype html>');
     assert.equal(page.headers.get('cross-origin-opener-policy'), 'same-origin');
     assert.equal(page.headers.get('cross-origin-embedder-policy'), 'require-corp');
     assert.match(page.headers.get('content-type'), /^text\/html/);
-    const types = { '/app/app.mjs': /^text\/javascript/, '/core/hawor_core.wasm': /^application\/wasm$/, '/assets/sample.webm': /^video\/webm$/,
+    const types = { '/web/app/app.mjs': /^text\/javascript/, '/dist/hawor_core.wasm': /^application\/wasm$/, '/dist/sample.webm': /^video\/webm$/,
       '/node_modules/three/build/three.module.js': /^text\/javascript/ };
     for (const [p, re] of Object.entries(types)) {
       const r = await fetch(base + p);
@@ -41,11 +53,14 @@ test('server: isolation headers, MIME types, ranges, only the routed folders', a
       assert.equal(r.headers.get('cross-origin-embedder-policy'), 'require-corp', p);
       await r.arrayBuffer();
     }
-    const part = await fetch(`${base}/assets/sample.webm`, { headers: { Range: 'bytes=2-5' } });
+    // /dist/: the package's dist/ first, then the checkout's build folders.
+    assert.deepEqual(await (await fetch(`${base}/dist/sample.json`)).json(), { from: 'dist' });
+    const part = await fetch(`${base}/dist/sample.webm`, { headers: { Range: 'bytes=2-5' } });
     assert.equal(part.status, 206);
     assert.equal(await part.text(), '2345');
     assert.equal(part.headers.get('content-range'), 'bytes 2-5/10');
-    for (const p of ['/package.json', '/node_modules/secret/x.js', '/app/../package.json', '/app/%2e%2e/%2e%2e/package.json', '/app/..%2f..%2fpackage.json', '/app/missing.js']) {
+    for (const p of ['/package.json', '/node_modules/secret/x.js', '/web/cli.mjs', '/app/app.mjs', '/web/app/../../package.json', '/web/app/%2e%2e/%2e%2e/package.json',
+      '/web/app/..%2f..%2fpackage.json', '/dist/..%2fpackage.json', '/dist/%2e%2e/build/web/sample.json', '/web/app/missing.js']) {
       const r = await fetch(base + p);
       assert.equal(r.status, 404, p);
       await r.text();
@@ -57,8 +72,28 @@ test('server: isolation headers, MIME types, ranges, only the routed folders', a
     server.close();
     rmSync(root, { recursive: true, force: true });
   }
-  assert.equal(resolvePath('/r', '/app/..%2f..%2fetc/passwd'), null);
+  assert.equal(resolvePath('/r', '/web/app/..%2f..%2f..%2fetc/passwd'), null);
+  assert.equal(resolvePath('/r', '/dist/..%2f..%2fetc/passwd'), null);
   assert.equal(resolvePath('/r', '/etc/passwd'), null);
+});
+
+test('server: npm packages are found where npm put them (hoisted beside an installed package)', () => {
+  const proj = mkdtempSync(join(tmpdir(), 'hawor-srv-hoist-'));
+  try {
+    const root = join(proj, 'node_modules/hawor');
+    const three = join(proj, 'node_modules/three');
+    mkdirSync(root, { recursive: true });
+    mkdirSync(join(three, 'build'), { recursive: true });
+    // three's exports hide its package.json: the folder is found from its entry point.
+    writeFileSync(join(three, 'package.json'), JSON.stringify({ name: 'three', exports: { '.': { import: './build/three.module.js', require: './build/three.cjs' } } }));
+    writeFileSync(join(three, 'build/three.cjs'), '');
+    writeFileSync(join(three, 'build/three.module.js'), 'export {}');
+    assert.equal(packageRoot(root, 'three'), three);
+    assert.equal(resolvePath(root, '/node_modules/three/build/three.module.js'), join(three, 'build/three.module.js'));
+    assert.equal(packageRoot(root, 'not-installed'), join(root, 'node_modules/not-installed'));
+  } finally {
+    rmSync(proj, { recursive: true, force: true });
+  }
 });
 
 /// A tetrahedron moving along x, present in frames 0, 1 and 3 of 5 (frame 3 infilled).

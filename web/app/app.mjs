@@ -4,10 +4,12 @@
 import { InputError, LIMITS, openVideo, estimateFps, processingSize, videoFrames } from './video_source.mjs';
 import { SceneView } from './view3d.mjs';
 import { VideoOverlay } from './overlay.mjs';
-import { parseDepthConfig } from '/src/depth_model.mjs';
-import { EYE_HEIGHT_MIN, EYE_HEIGHT_MAX, eyeHeightError } from '/src/pipeline/eye_height.mjs';
+import { parseDepthConfig } from '../src/depth_model.mjs';
+import { EYE_HEIGHT_MIN, EYE_HEIGHT_MAX, eyeHeightError } from '../src/pipeline/eye_height.mjs';
 
 const $ = (id) => document.getElementById(id);
+/** The built-in sample's folder: the package's dist/ (web/server.mjs maps build/web there in a checkout). */
+const SAMPLE_DIR = new URL('../../dist/', import.meta.url).href;
 const t0 = performance.now();
 const ui = {
   video: $('video'), progress: $('progress'), stage: $('stage'), stages: $('stages'), message: $('message'),
@@ -40,16 +42,28 @@ function showMessage(text, kind = 'error') {
 function clearMessage() { ui.message.hidden = true; ui.message.textContent = ''; delete ui.message.dataset.kind; }
 
 const STAGE_NAMES = { decode: 'decoding frames' };
+const stageText = (stage, st) => `${STAGE_NAMES[stage] || stage} ${st.total ? `${st.done}/${st.total}` : ''} · ${((st.last - st.first) / 1000).toFixed(1)} s`;
+
+/** A stage that is over: its full count (a frame count keeps the frames it reached), class 'done'. */
+function completeStage(stage, st) {
+  if (st.total) { if (st.done > 0) st.total = st.done; else st.done = st.total; }
+  st.li.className = 'done';
+  st.li.textContent = stageText(stage, st);
+}
+
 function setStage(stage, done, total) {
   ui.stage.textContent = total ? `${STAGE_NAMES[stage] || stage}: ${done}/${total}` : `${STAGE_NAMES[stage] || stage}…`;
   if (total) ui.progress.value = Math.min(1, done / total);
   const run = app.run;
   if (!run) return;
+  // The pipeline's end: every stage is over.
+  if (stage === 'done') { for (const [k, st] of run.stages) completeStage(k, st); return; }
   let st = run.stages.get(stage);
   const now = performance.now();
   if (!st) {
-    // A new stage: the ones before it are over.
-    for (const prev of run.stages.values()) prev.li.className = 'done';
+    // A new stage of the pipeline: the ones before it are over, except the page's decoding, which
+    // runs beside the worker's per-frame stage until its last frame (a cancel ends nothing).
+    if (stage !== 'cancelling') for (const [k, prev] of run.stages) if (k !== 'decode' || run.decoded !== undefined) completeStage(k, prev);
     st = { first: now, last: now, li: document.createElement('li') };
     run.stages.set(stage, st);
     ui.stages.appendChild(st.li);
@@ -57,18 +71,20 @@ function setStage(stage, done, total) {
   st.last = now;
   st.done = done; st.total = total;
   if (total && done >= total) st.li.className = 'done';
-  st.li.textContent = `${STAGE_NAMES[stage] || stage} ${total ? `${done}/${total}` : ''} · ${((st.last - st.first) / 1000).toFixed(1)} s`;
+  st.li.textContent = stageText(stage, st);
 }
 
 // --- the worker ----------------------------------------------------------------------------------
 
 function startWorker() {
-  app.worker = new Worker('/app/worker.mjs', { type: 'module' });
+  app.worker = new Worker(new URL('./worker.mjs', import.meta.url), { type: 'module' });
   app.ready = new Promise((resolve, reject) => {
     app.worker.onmessage = (ev) => onWorker(ev.data, resolve);
     app.worker.onerror = (ev) => { ev.preventDefault(); const m = `The processing worker failed to start: ${ev.message || 'load error'}`; showMessage(m); reject(new Error(m)); };
   });
-  app.worker.postMessage({ type: 'init' });
+  // A worker has no import map: it gets the mapped URLs of what it loads from here.
+  const hand = (side) => import.meta.resolve(`@webxr-input-profiles/assets/dist/profiles/generic-hand/${side}.glb`);
+  app.worker.postMessage({ type: 'init', urls: { ort: import.meta.resolve('onnxruntime-web'), hands: { left: hand('left'), right: hand('right') } } });
   return app.ready;
 }
 
@@ -419,11 +435,11 @@ $('btn-clear-models').onclick = () => { app.mano = { left: null, right: null }; 
 $('btn-sample').onclick = async () => {
   try {
     if (!app.sample) {
-      const r = await fetch('/assets/sample.json');
+      const r = await fetch(SAMPLE_DIR + 'sample.json');
       if (!r.ok) throw new InputError('setup', 'the synthetic sample is not built (run scripts/build_web.sh).');
       app.sample = await r.json();
     }
-    await processVideo(`/assets/${app.sample.video}`, 'synthetic sample', app.sample);
+    await processVideo(SAMPLE_DIR + app.sample.video, 'synthetic sample', app.sample);
   } catch (e) { showMessage(errorText(e.kind || 'setup', e.message)); }
 };
 ui.cancel.onclick = cancelRun;

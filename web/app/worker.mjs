@@ -4,16 +4,19 @@
 // All files are read from this page's own origin or from what the user dropped; nothing leaves
 // the browser.
 //
-// page -> worker: {type:'init'} | {type:'start', meta, options} | {type:'frame', index, rgba}
+// Every import is relative to this file; what the page's import map names (onnxruntime-web, the
+// default hand of @webxr-input-profiles/assets) comes as URLs in the init message.
+//
+// page -> worker: {type:'init', urls: {ort, hands: {left, right}}} | {type:'start', meta, options} | {type:'frame', index, rgba}
 //   | {type:'end'} | {type:'cancel'} | {type:'load-result', text, options} | {type:'export', format}
 // worker -> page: {type:'ready', info} | {type:'credit'} | {type:'progress', stage, done, total}
 //   | {type:'frame-info', info} | {type:'result', result, meshes} | {type:'error', kind, message}
 //   | {type:'cancelled'} | {type:'exported', format, data, mime, filename}
-import createHaworCore from '/core/hawor_core.mjs';
-import * as ort from '/node_modules/onnxruntime-web/dist/ort.wasm.min.mjs';
-import { handMeshSequence } from '/src/export/hand_meshes.mjs';
-import { buildGlb } from '/src/export/gltf.mjs';
+import { loadCore } from '../src/core.mjs';
+import { handMeshSequence } from '../src/export/hand_meshes.mjs';
+import { buildGlb } from '../src/export/gltf.mjs';
 
+let ort = null;          // onnxruntime-web's namespace, imported in init()
 const state = {
   core: null,
   models: {},            // 'lite' | 'full' -> { palm, landmark } bytes
@@ -28,28 +31,33 @@ const fail = (kind, message) => post({ type: 'error', kind, message });
 
 async function fetchBytes(url, what) {
   const r = await fetch(url);
-  if (!r.ok) throw Object.assign(new Error(`${what} is missing from the server (${url}: HTTP ${r.status}); run scripts/build_web.sh`), { kind: 'setup' });
+  if (!r.ok) throw Object.assign(new Error(`${what} is missing from the server (${url}: HTTP ${r.status}); serve the app with web/server.mjs after scripts/build_web.sh (checkout) or from the installed package`), { kind: 'setup' });
   return new Uint8Array(await r.arrayBuffer());
 }
 
-async function init() {
+async function init(urls) {
   const t0 = performance.now();
-  state.core = await createHaworCore({ locateFile: (f) => `/core/${f}` });
-  ort.env.wasm.wasmPaths = '/node_modules/onnxruntime-web/dist/';
-  ort.env.logLevel = 'error';
-  const [left, right] = await Promise.all([
-    fetchBytes('/assets/hand_left.npz', 'the default left hand'),
-    fetchBytes('/assets/hand_right.npz', 'the default right hand'),
+  const setup = (what, e) => Object.assign(new Error(`${what} could not be loaded: ${e.message}`), { kind: 'setup' });
+  const [core, ortModule, left, right] = await Promise.all([
+    loadCore().catch((e) => { throw setup('The C++ core', e); }),
+    import(urls.ort).catch((e) => { throw setup(`onnxruntime-web (${urls.ort})`, e); }),
+    fetchBytes(urls.hands.left, 'the default left hand'),
+    fetchBytes(urls.hands.right, 'the default right hand'),
   ]);
-  state.defaultHands = { left: { bytes: left, name: 'hand_left.npz' }, right: { bytes: right, name: 'hand_right.npz' } };
+  state.core = core;
+  ort = ortModule;
+  ort.env.wasm.wasmPaths = new URL('./', urls.ort).href;
+  ort.env.logLevel = 'error';
+  // The licence-free default hand: the WebXR glTF hands, read by the core as they are.
+  state.defaultHands = { left: { bytes: left, name: 'left.glb' }, right: { bytes: right, name: 'right.glb' } };
   return { ms: performance.now() - t0, crossOriginIsolated: self.crossOriginIsolated, cores: navigator.hardwareConcurrency };
 }
 
 async function networks(kind) {
   if (!state.models[kind]) {
     const [palm, landmark] = await Promise.all([
-      fetchBytes(`/models/palm_detection_${kind}.onnx`, `the palm detector (${kind})`),
-      fetchBytes(`/models/hand_landmark_${kind}.onnx`, `the hand landmarker (${kind})`),
+      fetchBytes(new URL(`../models/palm_detection_${kind}.onnx`, import.meta.url), `the palm detector (${kind})`),
+      fetchBytes(new URL(`../models/hand_landmark_${kind}.onnx`, import.meta.url), `the hand landmarker (${kind})`),
     ]);
     state.models[kind] = { palm, landmark };
   }
@@ -131,7 +139,7 @@ async function start(meta, options) {
   try {
     let run;
     try {
-      ({ runPipeline: run } = await import('/src/pipeline/run.mjs'));
+      ({ runPipeline: run } = await import('../src/pipeline/run.mjs'));
     } catch (e) {
       throw Object.assign(new Error(`The processing pipeline (web/src/pipeline/run.mjs) could not be loaded: ${e.message}`), { kind: 'setup' });
     }
@@ -214,7 +222,7 @@ async function exportResult(format) {
     });
     return { data: glb, mime: 'model/gltf-binary', filename: 'hawor.glb' };
   }
-  const ex = await import('/src/pipeline/exports.mjs');
+  const ex = await import('../src/pipeline/exports.mjs');
   if (format === 'json') return { data: ex.resultToJson(r), mime: 'application/json', filename: 'result.json' };
   if (format === 'npz') return { data: ex.resultToWorldNpz(r), mime: 'application/octet-stream', filename: 'hawor_world.npz' };
   if (format === 'tum') return { data: ex.resultToTum(r), mime: 'text/plain', filename: 'camera.tum' };
@@ -225,7 +233,7 @@ self.onmessage = async (ev) => {
   const m = ev.data;
   try {
     switch (m.type) {
-      case 'init': post({ type: 'ready', info: await init() }); break;
+      case 'init': post({ type: 'ready', info: await init(m.urls) }); break;
       case 'start': start(m.meta, m.options); break;
       case 'frame': if (state.run) state.run.frames.push({ index: m.index, rgba: new Uint8ClampedArray(m.rgba) }); break;
       case 'end': if (state.run) state.run.frames.end(); break;
