@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds what the browser app serves (nothing of it is committed):
 #   build/wasm/wasm/hawor_core.{mjs,wasm}   the C++ core (emscripten)
-#   build/web/hand_{left,right}.npz         the default (licence-free) hands
 #   build/web/sample.webm + sample.json     the built-in synthetic sample (hawor synth, VP9)
-# and checks that web/models/ holds the converted hand networks (scripts/install.sh).
+# and checks that web/models/ holds the converted hand networks (scripts/install.sh). The app's
+# default hand is the WebXR glTF hand of node_modules (@webxr-input-profiles/assets), read as is;
+# web/server.mjs serves these at /dist/ and /node_modules/, as an installed npm package lays them out.
 # Environment: HAWOR_NATIVE_BUILD (default build/native: the hawor CLI and its models/),
 # HAWOR_JOBS (default: the number of CPUs).
 set -euo pipefail
@@ -14,8 +15,8 @@ native=${HAWOR_NATIVE_BUILD:-$root/build/native}
 hawor="$native/examples/hawor"
 out=build/web
 
-if [[ ! -x "$hawor" || ! -f "$native/models/hand_left.npz" || ! -f "$native/models/hand_right.npz" ]]; then
-  echo "[build_web] native hawor CLI and default hands ($native)" >&2
+if [[ ! -x "$hawor" ]]; then
+  echo "[build_web] native hawor CLI ($native)" >&2
   source scripts/native_compiler.sh
   [[ -f "$native/CMakeCache.txt" ]] || env $(native_compiler_env) cmake -S . -B "$native" -DCMAKE_BUILD_TYPE=Release >/dev/null
   cmake --build "$native" --target hawor_cli default_hands -j"$jobs" >/dev/null
@@ -36,9 +37,6 @@ for m in palm_detection_lite palm_detection_full hand_landmark_lite hand_landmar
 done
 
 mkdir -p "$out"
-for side in left right; do
-  cmp -s "$native/models/hand_$side.npz" "$out/hand_$side.npz" 2>/dev/null || cp "$native/models/hand_$side.npz" "$out/hand_$side.npz"
-done
 
 # The synthetic sample: 60 frames of the table_work preset (seed 1), 640x480 at 30 fps, VP9.
 if [[ ! -f "$out/sample.webm" || ! -f "$out/sample.json" ]]; then

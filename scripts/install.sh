@@ -23,9 +23,9 @@ if ! command -v npm >/dev/null; then
   apt-get install -y -qq --no-install-recommends npm >/dev/null
 fi
 # npm packages of package.json (exact versions): the licence-free default hand (MIT),
-# onnxruntime-web (the depth slot, browser and node), pngjs (PNG frames in node),
-# @mediapipe/hands (the hand networks, Apache-2.0), three (the app's 3D view, MIT);
-# devDependencies: the TFLite runtime (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend,
+# onnxruntime-web (the hand and depth networks, browser and node), @mediapipe/hands (the hand
+# networks, Apache-2.0), three (the app's 3D view, MIT; a dependency because the npm package ships
+# the app); devDependencies: pngjs (PNG frames for the tests and web/tools/run_depth.mjs), the TFLite runtime (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend,
 # converter) that the tests use as independent references, playwright-core (drives Debian's
 # chromium in the browser tests, Apache-2.0; it downloads no browser) and gltf-validator (the
 # Khronos glTF validator, Apache-2.0, checks the app's GLB export). npm install runs when any of them is missing from node_modules or at

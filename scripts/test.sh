@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test: native (Release), the JavaScript tests under node (tests/web), parsers under
 # ASan+UBSan (+ libFuzzer briefly, clang), the same unit tests compiled to WebAssembly under
-# node, the browser app in headless Chromium (tests/browser). Ends with "N passed, N failed".
+# node, the browser app in headless Chromium (tests/browser), the npm package packed, installed
+# and run (tests/package). Ends with "N passed, N failed".
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -95,6 +96,18 @@ run_browser_suite() {
   echo "=== [browser] done in $((SECONDS - t0)) s" >&2
 }
 
+# run_package_suite: the npm package (tests/package), after the browser stage's build_web.sh: npm
+# pack (its prepack stages the WebAssembly core and the sample into dist/), an install of the
+# tarball into an empty folder (npm's registry or its cache, warm after scripts/install.sh), then
+# the installed `hawor` CLI on the sample and imports of its modules.
+run_package_suite() {
+  echo "=== [package] node --test tests/package" >&2
+  local t0=$SECONDS
+  node --test --test-reporter=tap tests/package/*.test.mjs 2>&1 | tee "$log_dir/package-test.log"
+  tally_node package "$log_dir/package-test.log" "${PIPESTATUS[0]}"
+  echo "=== [package] done in $((SECONDS - t0)) s" >&2
+}
+
 # run_sanitize_suite: the parsers under ASan + UBSan (its own build folder, nothing shared).
 run_sanitize_suite() {
   if command -v clang++ >/dev/null; then
@@ -131,6 +144,7 @@ else
   echo "[sanitize] no tally" >&2; total_fail=$((total_fail + 1)); status=1
 fi
 run_browser_suite
+run_package_suite
 
 echo "$total_pass passed, $total_fail failed"
 exit $status
