@@ -19,15 +19,15 @@ if [[ ! -x "$hawor" ]]; then
   echo "[build_web] native hawor CLI ($native)" >&2
   source scripts/native_compiler.sh
   [[ -f "$native/CMakeCache.txt" ]] || env $(native_compiler_env) cmake -S . -B "$native" -DCMAKE_BUILD_TYPE=Release >/dev/null
-  cmake --build "$native" --target hawor_cli default_hands -j"$jobs" >/dev/null
+  cmake --build "$native" --target hawor_cli default_hands -j"$jobs"
 fi
 
 if [[ ! -f build/wasm/CMakeCache.txt ]]; then
   echo "[build_web] configuring build/wasm (emscripten)" >&2
   emcmake cmake -S . -B build/wasm -DCMAKE_BUILD_TYPE=Release >/dev/null
 fi
-echo "[build_web] hawor_core (WebAssembly)" >&2
-cmake --build build/wasm --target hawor_core -j"$jobs" >/dev/null
+echo "[build_web] hawor_core (WebAssembly; about 2 minutes on two cores when it is not built yet)" >&2
+cmake --build build/wasm --target hawor_core -j"$jobs"
 
 for m in palm_detection_lite palm_detection_full hand_landmark_lite hand_landmark_full; do
   if [[ ! -f "web/models/$m.onnx" ]]; then

