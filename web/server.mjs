@@ -11,7 +11,7 @@
 //   /web/src/...      web/src/            the shared JavaScript (core loader, perception, pipeline, exports)
 //   /web/tools/...    web/tools/          shared helpers the exports import (npz.mjs)
 //   /web/models/...   web/models/         the ONNX hand networks converted at install
-//   /dist/...         dist/ (installed package), else build/wasm/wasm/ and build/web/ (checkout):
+//   /dist/...         build/wasm/wasm/ and build/web/ (checkout), else dist/ (installed package):
 //                     hawor_core.mjs + .wasm, the synthetic sample
 //   /node_modules/{three,onnxruntime-web,@webxr-input-profiles/assets}/...   the npm packages the
 //                     page loads (three.js, onnxruntime-web, the default hand), found by node's
@@ -26,6 +26,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
+import { BUILT_DIRS } from './src/core.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 
@@ -74,7 +75,7 @@ export function routes(root) {
       ['/web/src/', [path.join(root, 'web/src')]],
       ['/web/tools/', [path.join(root, 'web/tools')]],
       ['/web/models/', [path.join(root, 'web/models')]],
-      ['/dist/', ['dist', 'build/wasm/wasm', 'build/web'].map((d) => path.join(root, d))],
+      ['/dist/', BUILT_DIRS.map((d) => path.join(root, d))],
       ...PACKAGES.map((name) => [`/node_modules/${name}/`, [packageRoot(root, name)]]),
     ]);
   }

@@ -18,6 +18,7 @@ function fakeRepo() {
   writeFileSync(join(root, 'build/web/sample.webm'), Buffer.from('0123456789'));
   writeFileSync(join(root, 'build/web/sample.json'), '{"from": "build"}');
   writeFileSync(join(root, 'dist/sample.json'), '{"from": "dist"}');
+  writeFileSync(join(root, 'dist/packed.json'), '{"from": "dist"}');
   // three's exports hide its package.json: the server finds the folder from the entry point.
   writeFileSync(join(root, 'node_modules/three/package.json'), JSON.stringify({ name: 'three', exports: { '.': { import: './build/three.module.js', require: './build/three.cjs' } } }));
   writeFileSync(join(root, 'node_modules/three/build/three.module.js'), 'export {}');
@@ -53,8 +54,10 @@ test('server: isolation headers, MIME types, ranges, only the routed folders', a
       assert.equal(r.headers.get('cross-origin-embedder-policy'), 'require-corp', p);
       await r.arrayBuffer();
     }
-    // /dist/: the package's dist/ first, then the checkout's build folders.
-    assert.deepEqual(await (await fetch(`${base}/dist/sample.json`)).json(), { from: 'dist' });
+    // /dist/: a checkout's build folders first (a dist/ staged by an earlier npm pack may be
+    // older), then the package's dist/.
+    assert.deepEqual(await (await fetch(`${base}/dist/sample.json`)).json(), { from: 'build' });
+    assert.deepEqual(await (await fetch(`${base}/dist/packed.json`)).json(), { from: 'dist' });
     const part = await fetch(`${base}/dist/sample.webm`, { headers: { Range: 'bytes=2-5' } });
     assert.equal(part.status, 206);
     assert.equal(await part.text(), '2345');

@@ -4,28 +4,26 @@
 //   import { loadCore } from 'hawor/core';
 //   const core = await loadCore();            // { HandModel, HandFitter, MonoSlam, metricScale, ... }
 //
-// Build outputs are found by one resolver, builtFile(name): dist/ in an installed package
-// (web/tools/stage_package.mjs copies them there when packing), else build/wasm/wasm/ and
-// build/web/ in a checkout. No node module is imported statically: this file also runs in a
-// browser, where the candidates are tried as URLs relative to this file.
+// Build outputs are found by one resolver, builtFile(name): build/wasm/wasm/ and build/web/ in a
+// checkout, else dist/ in an installed package (web/tools/stage_package.mjs copies them there when
+// packing). No node module is imported statically: this file also runs in a browser, where the
+// core is loaded from dist/ relative to the package root (web/server.mjs maps it).
 
-/** Folders that may hold a build output, relative to the package root, in order. */
-export const BUILT_DIRS = ['dist', 'build/wasm/wasm', 'build/web'];
+/** Folders that may hold a build output, relative to the package root, in the order they are
+ *  searched: a checkout's build folders first (a dist/ staged by an earlier `npm pack` may be
+ *  older than them), then an installed package's dist/. web/server.mjs serves them, in this
+ *  order, at /dist/, the one URL a browser asks for. */
+export const BUILT_DIRS = ['build/wasm/wasm', 'build/web', 'dist'];
 const PACKAGE_ROOT = new URL('../../', import.meta.url);
 const isNode = typeof process === 'object' && !!(process.versions && process.versions.node) && typeof window === 'undefined';
 const BUILD_HINT = 'build it with `emcmake cmake -S . -B build/wasm && cmake --build build/wasm --target hawor_core` in a checkout, or reinstall the package';
 
-/** The candidate URLs of a build output (dist/, build/wasm/wasm/, build/web/). */
-export function builtUrls(name) {
-  return BUILT_DIRS.map((d) => new URL(`${d}/${name}`, PACKAGE_ROOT));
-}
-
-/** node only: the path of the first existing candidate of builtUrls(name), or null. */
+/** node only: the path of `name` in the first of BUILT_DIRS that holds it, or null. */
 export async function builtFile(name) {
   const { existsSync } = await import('node:fs');
   const { fileURLToPath } = await import('node:url');
-  for (const u of builtUrls(name)) {
-    const p = fileURLToPath(u);
+  for (const d of BUILT_DIRS) {
+    const p = fileURLToPath(new URL(`${d}/${name}`, PACKAGE_ROOT));
     if (existsSync(p)) return p;
   }
   return null;
@@ -63,7 +61,7 @@ async function loadInNode(path, moduleOptions) {
 }
 
 async function loadInBrowser(url, moduleOptions) {
-  const candidates = url ? [new URL(url, import.meta.url)] : builtUrls('hawor_core.mjs');
+  const candidates = [url ? new URL(url, import.meta.url) : new URL('dist/hawor_core.mjs', PACKAGE_ROOT)];
   const errors = [];
   for (const u of candidates) {
     let create;
