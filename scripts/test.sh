@@ -2,7 +2,7 @@
 # Runs every test: native (Release), the JavaScript tests under node (tests/web), parsers under
 # ASan+UBSan (+ libFuzzer briefly, clang), the same unit tests compiled to WebAssembly under
 # node, the browser app in headless Chromium (tests/browser), the npm package packed, installed
-# and run (tests/package). Ends with "N passed, N failed".
+# and run (tests/package), and the README's commands (tests/docs). Ends with "N passed, N failed".
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -82,8 +82,8 @@ run_node_suite() {
 }
 
 # run_browser_suite: the browser app end to end in headless Chromium (tests/browser), after the
-# WebAssembly core is built: scripts/build_web.sh adds the default hands and the synthetic sample
-# (build/web), then node's runner drives Debian's chromium through playwright-core.
+# WebAssembly core is built: scripts/build_web.sh adds the synthetic sample (build/web), then
+# node's runner drives Debian's chromium through playwright-core.
 run_browser_suite() {
   echo "=== [browser] scripts/build_web.sh + node --test tests/browser" >&2
   local t0=$SECONDS
@@ -106,6 +106,16 @@ run_package_suite() {
   node --test --test-reporter=tap tests/package/*.test.mjs 2>&1 | tee "$log_dir/package-test.log"
   tally_node package "$log_dir/package-test.log" "${PIPESTATUS[0]}"
   echo "=== [package] done in $((SECONDS - t0)) s" >&2
+}
+
+# run_readme_suite: the README's commands as written (tests/docs/readme.test.mjs: every sh block
+# but the suite itself and the one that needs the user's MANO files), after the builds above.
+run_readme_suite() {
+  echo "=== [readme] node --test tests/docs" >&2
+  local t0=$SECONDS
+  node --test --test-reporter=tap tests/docs/*.test.mjs 2>&1 | tee "$log_dir/readme-test.log"
+  tally_node readme "$log_dir/readme-test.log" "${PIPESTATUS[0]}"
+  echo "=== [readme] done in $((SECONDS - t0)) s" >&2
 }
 
 # run_sanitize_suite: the parsers under ASan + UBSan (its own build folder, nothing shared).
@@ -145,6 +155,7 @@ else
 fi
 run_browser_suite
 run_package_suite
+run_readme_suite
 
 echo "$total_pass passed, $total_fail failed"
 exit $status
