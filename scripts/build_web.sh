@@ -2,7 +2,7 @@
 # Builds what the browser app serves (nothing of it is committed):
 #   build/wasm/wasm/hawor_core.{mjs,wasm}   the C++ core (emscripten)
 #   build/web/sample.webm + sample.json     the built-in synthetic sample (hawor synth, VP9)
-# and checks that web/models/ holds the converted hand networks (scripts/install.sh). The app's
+# and converts the hand networks into web/models/ when missing (as scripts/install.sh does). The app's
 # default hand is the WebXR glTF hand of node_modules (@webxr-input-profiles/assets), read as is;
 # web/server.mjs serves these at /dist/ and /node_modules/, as an installed npm package lays them out.
 # Environment: HAWOR_NATIVE_BUILD (default build/native: the hawor CLI and its models/),
@@ -31,8 +31,9 @@ cmake --build build/wasm --target hawor_core -j"$jobs"
 
 for m in palm_detection_lite palm_detection_full hand_landmark_lite hand_landmark_full; do
   if [[ ! -f "web/models/$m.onnx" ]]; then
-    echo "[build_web] web/models/$m.onnx missing: run scripts/install.sh (it converts MediaPipe's networks)" >&2
-    exit 1
+    # The same conversion scripts/install.sh runs (< 1 s; fails with a message naming what is missing).
+    node web/tools/convert_mediapipe.mjs --out web/models
+    break
   fi
 done
 

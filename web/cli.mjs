@@ -18,10 +18,11 @@
 // stderr). Exit codes: 2 usage error, 1 bad input (the message names it), 0 success (also when
 // no hand was found: result.json says "noHands": true).
 //
-// Defaults: the core from $HAWOR_CORE, else dist/ (installed package) or build/wasm/wasm
-// (checkout), found by src/core.mjs's builtFile, which also finds the sample (dist/ or
-// build/web); hand models from --mano DIR (MANO_LEFT/RIGHT .pkl or .npz), else $HAWOR_HAND_DIR or
-// build/native/models (hand_{left,right}.npz), else the WebXR glTF hands of the installed
+// Defaults: the core from $HAWOR_CORE, else build/wasm/wasm (checkout) or dist/ (installed
+// package), found by src/core.mjs's builtFile, which also finds the sample (build/web or dist/);
+// hand models from --mano DIR (MANO_LEFT/RIGHT .pkl or .npz), else $HAWOR_HAND_DIR or
+// build/native/models (hand_{left,right}.npz or {left,right}.glb, as the native tool's
+// findDefaultHandModel looks), else the WebXR glTF hands of the installed
 // @webxr-input-profiles/assets; perception networks from web/models (converted at install; when
 // missing there, e.g. after npm install --ignore-scripts, they are converted on the spot).
 
@@ -175,9 +176,9 @@ export function handModelFiles(o) {
   }
   const dirs = [process.env.HAWOR_HAND_DIR, join(repo, 'build', 'native', 'models')].filter(Boolean);
   for (const d of dirs) {
-    const l = join(d, 'hand_left.npz');
-    const r = join(d, 'hand_right.npz');
-    if (existsSync(l) && existsSync(r)) return { left: l, right: r };
+    for (const [l, r] of [['hand_left.npz', 'hand_right.npz'], ['left.glb', 'right.glb']]) {
+      if (existsSync(join(d, l)) && existsSync(join(d, r))) return { left: join(d, l), right: join(d, r) };
+    }
   }
   const assets = packageDir('@webxr-input-profiles/assets');
   const glb = assets && join(assets, 'dist', 'profiles', 'generic-hand');

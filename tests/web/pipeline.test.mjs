@@ -129,6 +129,24 @@ test('core.rotationsToQuaternions: rotation matrices -> quaternions (x, y, z, w)
   }
 });
 
+test('pipeline CLI: hand models from --mano, then $HAWOR_HAND_DIR (hand_*.npz, else *.glb, as the native tool looks)', async () => {
+  const { handModelFiles } = await import('../../web/cli.mjs');
+  const dir = mkdtempSync(join(tmpdir(), 'hawor-hands-'));
+  const saved = process.env.HAWOR_HAND_DIR;
+  try {
+    process.env.HAWOR_HAND_DIR = dir;
+    for (const f of ['left.glb', 'right.glb']) writeFileSync(join(dir, f), 'x');
+    assert.deepEqual(handModelFiles({}), { left: join(dir, 'left.glb'), right: join(dir, 'right.glb') });
+    for (const f of ['hand_left.npz', 'hand_right.npz']) writeFileSync(join(dir, f), 'x');
+    assert.deepEqual(handModelFiles({}), { left: join(dir, 'hand_left.npz'), right: join(dir, 'hand_right.npz') });
+    for (const f of ['MANO_LEFT.pkl', 'MANO_RIGHT.npz']) writeFileSync(join(dir, f), 'x');
+    assert.deepEqual(handModelFiles({ mano: dir }), { left: join(dir, 'MANO_LEFT.pkl'), right: join(dir, 'MANO_RIGHT.npz') });
+  } finally {
+    if (saved === undefined) delete process.env.HAWOR_HAND_DIR; else process.env.HAWOR_HAND_DIR = saved;
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('pipeline: left/right slots from handedness and continuity', () => {
   const det = (hand, score, x) => ({ handedness: hand, handednessScore: score, landmarks: Float32Array.of(x, 100) });
   const none = { left: null, right: null };
