@@ -59,6 +59,9 @@ case "$mode" in
     # Under Emscripten's toolchain every package search is re-rooted: the prefix is a root.
     emcmake cmake -S "$src" -B "$work/wasm" "${cfg[@]}" -DCMAKE_FIND_ROOT_PATH="$prefix"
     cmake --build "$work/wasm"
+    # consumer.js is CommonJS; when WORK lies inside this checkout, node would take the
+    # repository's package.json ("type": "module") for it: a package.json beside it says otherwise.
+    echo '{"type": "commonjs"}' >"$work/wasm/package.json"
     # Node 20 needs --no-experimental-fetch to load Emscripten 3.1.6 modules.
     node --no-experimental-fetch "$work/wasm/consumer.js" "$hand" stb=on
     ;;
