@@ -18,6 +18,7 @@ import { spawnSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 import { cmakeVersion, STAGED } from '../../web/tools/stage_package.mjs';
 import { MODEL_NAMES } from '../../web/tools/convert_mediapipe.mjs';
+import { BUILT_DIRS } from '../../web/src/core.mjs';
 
 const root = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
 const pkg = JSON.parse(readFileSync(join(root, 'package.json'), 'utf8'));
@@ -141,7 +142,9 @@ test('the installed package: npx hawor --help, run --sample, networks converted 
   try {
     r = hawor(['run', '--sample', '--out', join(project, 'out3')]);
     assert.equal(r.status, 1, r.stderr);
-    assert.match(r.stderr, /the WebAssembly core hawor_core\.mjs is missing \(not in dist\/, build\/wasm\/wasm\/, build\/web\/ of .*node_modules\/hawor\/\)/);
+    // The message lists every folder the resolver looked in (core.mjs's BUILT_DIRS, in order).
+    const looked = BUILT_DIRS.map((d) => `${d}/`).join(', ').replace(/[/.]/g, '\\$&');
+    assert.match(r.stderr, new RegExp(`the WebAssembly core hawor_core\\.mjs is missing \\(not in ${looked} of .*node_modules/hawor/\\)`));
   } finally {
     renameSync(join(installed, 'dist/moved.mjs'), join(installed, 'dist/hawor_core.mjs'));
   }
