@@ -81,41 +81,36 @@ run_node_suite() {
   echo "=== [node] done in $((SECONDS - t0)) s" >&2
 }
 
-# run_browser_suite: the browser app end to end in headless Chromium (tests/browser), after the
-# WebAssembly core is built: scripts/build_web.sh adds the synthetic sample (build/web), then
-# node's runner drives Debian's chromium through playwright-core.
-run_browser_suite() {
+# run_node_stage NAME FILES...: node's test runner over FILES, its TAP summary tallied as NAME.
+run_node_stage() {
+  local name=$1 t0=$SECONDS; shift
+  node --test --test-reporter=tap "$@" 2>&1 | tee "$log_dir/$name-test.log"
+  tally_node "$name" "$log_dir/$name-test.log" "${PIPESTATUS[0]}"
+  echo "=== [$name] done in $((SECONDS - t0)) s" >&2
+}
+
+# The stages after the builds, in this order (each uses what the one before built):
+#   browser  the app end to end in headless Chromium (tests/browser): scripts/build_web.sh adds
+#            the synthetic sample (build/web), then node's runner drives Debian's chromium
+#            through playwright-core;
+#   package  the npm package (tests/package): npm pack (its prepack stages the WebAssembly core
+#            and the sample into dist/), an install of the tarball into an empty folder (npm's
+#            registry or its cache, warm after scripts/install.sh), the installed `hawor` CLI on
+#            the sample and imports of its modules;
+#   readme   the README's commands as written (tests/docs: every sh block but the suite itself
+#            and the one that needs the user's MANO files). It packs too, so it runs after
+#            package, not beside it (npm pack rewrites dist/).
+run_late_stages() {
   echo "=== [browser] scripts/build_web.sh + node --test tests/browser" >&2
-  local t0=$SECONDS
   if ! HAWOR_JOBS="$jobs" bash scripts/build_web.sh >"$log_dir/browser-build.log" 2>&1; then
     tail -20 "$log_dir/browser-build.log" >&2; echo "[browser] build_web.sh FAILED" >&2
     total_fail=$((total_fail + 1)); status=1; return
   fi
-  node --test --test-reporter=tap tests/browser/*.test.mjs 2>&1 | tee "$log_dir/browser-test.log"
-  tally_node browser "$log_dir/browser-test.log" "${PIPESTATUS[0]}"
-  echo "=== [browser] done in $((SECONDS - t0)) s" >&2
-}
-
-# run_package_suite: the npm package (tests/package), after the browser stage's build_web.sh: npm
-# pack (its prepack stages the WebAssembly core and the sample into dist/), an install of the
-# tarball into an empty folder (npm's registry or its cache, warm after scripts/install.sh), then
-# the installed `hawor` CLI on the sample and imports of its modules.
-run_package_suite() {
+  run_node_stage browser tests/browser/*.test.mjs
   echo "=== [package] node --test tests/package" >&2
-  local t0=$SECONDS
-  node --test --test-reporter=tap tests/package/*.test.mjs 2>&1 | tee "$log_dir/package-test.log"
-  tally_node package "$log_dir/package-test.log" "${PIPESTATUS[0]}"
-  echo "=== [package] done in $((SECONDS - t0)) s" >&2
-}
-
-# run_readme_suite: the README's commands as written (tests/docs/readme.test.mjs: every sh block
-# but the suite itself and the one that needs the user's MANO files), after the builds above.
-run_readme_suite() {
+  run_node_stage package tests/package/*.test.mjs
   echo "=== [readme] node --test tests/docs" >&2
-  local t0=$SECONDS
-  node --test --test-reporter=tap tests/docs/*.test.mjs 2>&1 | tee "$log_dir/readme-test.log"
-  tally_node readme "$log_dir/readme-test.log" "${PIPESTATUS[0]}"
-  echo "=== [readme] done in $((SECONDS - t0)) s" >&2
+  run_node_stage readme tests/docs/*.test.mjs
 }
 
 # run_sanitize_suite: the parsers under ASan + UBSan (its own build folder, nothing shared).
@@ -153,9 +148,7 @@ if [[ -f "$log_dir/sanitize.tally" ]] && read -r sp sf ss <"$log_dir/sanitize.ta
 else
   echo "[sanitize] no tally" >&2; total_fail=$((total_fail + 1)); status=1
 fi
-run_browser_suite
-run_package_suite
-run_readme_suite
+run_late_stages
 
 echo "$total_pass passed, $total_fail failed"
 exit $status
