@@ -7,6 +7,7 @@ pkgs=(build-essential cmake git pkg-config
       emscripten nodejs                        # the WebAssembly build and its runtime
       clang libclang-rt-14-dev                 # libFuzzer targets and sanitizers
       python3 python3-numpy python3-scipy      # independent references run by the tests
+      python3-opencv                           # the lens reference (/usr/bin/python3 imports cv2)
       ffmpeg                                   # decodes the sample clip for the hand-network tests
       chromium)                                # the browser app's end-to-end tests (headless)
 missing=()
