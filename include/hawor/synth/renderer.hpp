@@ -19,6 +19,8 @@
 //           no libm)
 // The mask gets each hand's label where that hand is the nearest surface, 0 elsewhere: exactly
 // "the hand mesh is nearer than the scene" (and the nearer hand where the two overlap).
+// renderLinear() stops before the noise and the rounding to bytes (float colour for the capture
+// model of capture.hpp); setCamera() renders through another camera, e.g. a band of rows.
 // Thread-safety: a SceneRenderer holds scratch buffers; use one per thread.
 #pragma once
 
@@ -88,6 +90,68 @@ class SceneRenderer {
   /// the noise pattern (e.g. a hash of the sequence seed and the frame index).
   void render(const RigidPose<Scalar>& roomFromCamera, const std::vector<HandMeshView<Scalar>>& hands, float noiseSigma,
               std::uint32_t noiseSeed, RenderedImages& out) {
+    draw(roomFromCamera, hands, out);
+    const int W = cam_.width;
+    out.rgb.resize(W, cam_.height, 3);
+    const float noiseScale = noiseSigma * 2.449489743f / 255.0f;  // triangular on [−a, a]: σ = a/√6
+    shade(hands, out, [&](int x, int y, Rgb c) {
+      if (noiseSigma > 0.0f) {
+        const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x);
+        const std::uint32_t r1 = hash32(noiseSeed ^ (static_cast<std::uint32_t>(p) * 0x9E3779B1u));
+        const std::uint32_t r2 = hash32(r1 ^ 0x68E31DA4u);
+        const float s = noiseScale;
+        c.r += s * (static_cast<float>(r1 & 0xFFu) + static_cast<float>((r1 >> 8) & 0xFFu) - 255.0f);
+        c.g += s * (static_cast<float>((r1 >> 16) & 0xFFu) + static_cast<float>(r1 >> 24) - 255.0f);
+        c.b += s * (static_cast<float>(r2 & 0xFFu) + static_cast<float>((r2 >> 8) & 0xFFu) - 255.0f);
+      }
+      std::uint8_t* px = out.rgb.row(y) + 3 * x;
+      px[0] = toByte(c.r);
+      px[1] = toByte(c.g);
+      px[2] = toByte(c.b);
+    });
+  }
+
+  /// The same render without noise and before quantisation: `rgb` (W × H × 3 float, grey levels,
+  /// not clamped) for the capture model of capture.hpp; out.depth, out.mask and out.handPixels as
+  /// render() fills them; out.rgb is left alone.
+  void renderLinear(const RigidPose<Scalar>& roomFromCamera, const std::vector<HandMeshView<Scalar>>& hands, ImageF& rgb,
+                    RenderedImages& out) {
+    draw(roomFromCamera, hands, out);
+    rgb.resize(cam_.width, cam_.height, 3);
+    shade(hands, out, [&](int x, int y, const Rgb& c) {
+      float* px = rgb.row(y) + 3 * x;
+      px[0] = c.r;
+      px[1] = c.g;
+      px[2] = c.b;
+    });
+  }
+
+  /// Renders through another pinhole camera from now on (e.g. a band of rows of a larger image:
+  /// the same fx, fy, cx, with cy − y0 and height h renders rows [y0, y0 + h) of it).
+  void setCamera(const PinholeCamera<Scalar>& camera) {
+    cam_ = camera;
+    raster_ = Rasterizer<Scalar>(camera, rasterOptions());
+  }
+
+  /// Area-weighted vertex normals of a mesh (unit length; zero for unused vertices).
+  static void vertexNormals(const Points3<Scalar>& V, const TriangleList& F, Points3<Scalar>& N) {
+    N.setZero(V.rows(), 3);
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const Vec3<Scalar> a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
+      const Vec3<Scalar> n = (b - a).cross(c - a);
+      for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n.transpose();
+    }
+    for (Eigen::Index i = 0; i < N.rows(); ++i) {
+      const Scalar len = N.row(i).norm();
+      if (len > Scalar(0)) N.row(i) /= len;
+    }
+  }
+
+
+ private:
+  // Pass 1 (file comment): scene in the camera frame, per-face records, visibility into ids_ /
+  // qs_ and out.depth; hand vertex normals and the lights in the camera frame for pass 2.
+  void draw(const RigidPose<Scalar>& roomFromCamera, const std::vector<HandMeshView<Scalar>>& hands, RenderedImages& out) {
     const IndoorScene<Scalar>& S = *scene_;
     const int W = cam_.width, H = cam_.height;
     const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
@@ -154,17 +218,27 @@ class SceneRenderer {
       handNormals_[h] = normalScratch_.template cast<float>();
     }
     const Vec3<Scalar> l1s = camFromRoom.R * S.lightDir1, l2s = camFromRoom.R * S.lightDir2;
-    const float l1[3] = {float(l1s.x()), float(l1s.y()), float(l1s.z())};
-    const float l2[3] = {float(l2s.x()), float(l2s.y()), float(l2s.z())};
-    // Pass 2: shading.
-    out.rgb.resize(W, H, 3);
+    for (int k = 0; k < 3; ++k) {
+      light1_[k] = static_cast<float>(l1s(k));
+      light2_[k] = static_cast<float>(l2s(k));
+    }
+  }
+
+  // Pass 2 (file comment): the colour of every pixel, handed to sink(x, y, Rgb) row by row;
+  // fills out.mask and out.handPixels.
+  template <typename Sink>
+  void shade(const std::vector<HandMeshView<Scalar>>& hands, RenderedImages& out, Sink sink) {
+    const IndoorScene<Scalar>& S = *scene_;
+    const int W = cam_.width, H = cam_.height, F = S.numFaces();
+    const int* ids = ids_.data();
+    const float* qs = qs_.data();
+    const float* l1 = light1_;
+    const float* l2 = light2_;
     out.mask.resize(W, H, 1, 0);
     out.handPixels.assign(hands.size(), 0);
     const float fx = static_cast<float>(cam_.fx), fy = static_cast<float>(cam_.fy);
     const float cx = static_cast<float>(cam_.cx), cy = static_cast<float>(cam_.cy);
-    const float noiseScale = noiseSigma * 2.449489743f / 255.0f;  // triangular on [−a, a]: σ = a/√6
     for (int y = 0; y < H; ++y) {
-      std::uint8_t* rgbRow = out.rgb.row(y);
       std::uint8_t* maskRow = out.mask.row(y);
       const float* depthRow = out.depth.row(y);
       const float ry = (static_cast<float>(y) - cy) / fy;
@@ -206,36 +280,11 @@ class SceneRenderer {
             ++out.handPixels[h];
           }
         }
-        if (noiseSigma > 0.0f) {
-          const std::uint32_t r1 = hash32(noiseSeed ^ (static_cast<std::uint32_t>(p) * 0x9E3779B1u));
-          const std::uint32_t r2 = hash32(r1 ^ 0x68E31DA4u);
-          const float s = noiseScale;
-          c.r += s * (static_cast<float>(r1 & 0xFFu) + static_cast<float>((r1 >> 8) & 0xFFu) - 255.0f);
-          c.g += s * (static_cast<float>((r1 >> 16) & 0xFFu) + static_cast<float>(r1 >> 24) - 255.0f);
-          c.b += s * (static_cast<float>(r2 & 0xFFu) + static_cast<float>((r2 >> 8) & 0xFFu) - 255.0f);
-        }
-        rgbRow[3 * x] = toByte(c.r);
-        rgbRow[3 * x + 1] = toByte(c.g);
-        rgbRow[3 * x + 2] = toByte(c.b);
+        sink(x, y, c);
       }
     }
   }
 
-  /// Area-weighted vertex normals of a mesh (unit length; zero for unused vertices).
-  static void vertexNormals(const Points3<Scalar>& V, const TriangleList& F, Points3<Scalar>& N) {
-    N.setZero(V.rows(), 3);
-    for (Eigen::Index f = 0; f < F.rows(); ++f) {
-      const Vec3<Scalar> a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
-      const Vec3<Scalar> n = (b - a).cross(c - a);
-      for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n.transpose();
-    }
-    for (Eigen::Index i = 0; i < N.rows(); ++i) {
-      const Scalar len = N.row(i).norm();
-      if (len > Scalar(0)) N.row(i) /= len;
-    }
-  }
-
- private:
   static std::uint8_t toByte(float v) {
     const float c = v < 0.0f ? 0.0f : (v > 255.0f ? 255.0f : v);
     return static_cast<std::uint8_t>(c + 0.5f);
@@ -260,6 +309,7 @@ class SceneRenderer {
   std::vector<float> qs_;
   std::vector<int> handOffset_;
   std::vector<Points3<float>> handNormals_;
+  float light1_[3] = {0, 0, 0}, light2_[3] = {0, 0, 0};  ///< the lights in the camera frame
 
   static RasterOptions<Scalar> rasterOptions() {
     RasterOptions<Scalar> ro;
