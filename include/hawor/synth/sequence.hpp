@@ -23,6 +23,13 @@
 // (nearest surface there; a hand hidden by the scene or the other hand, or out of view, is
 // invalid); per keypoint `inImage` = in front of the camera (z > 1 cm) and projecting inside the
 // image (it may still be occluded).
+// Capture (capture.hpp, SynthOptions::capture): exposure, rolling shutter, noise, exposure and
+// white-balance drift, lens. The ground truth is that of the frame's reference time t_i = i/fps
+// (the middle row's mid-exposure); sub-frames at t_i + τ take the camera from the continuous
+// path (CameraPath::at) and the hands from their per-frame parameters, interpolated
+// (interpolateHandPose: SLERP of the rotations, LERP of the translation). kp_in_image projects
+// through the lens. Auto-exposure meters every frame up to the one rendered (a 64-pixel-wide
+// render, cached), so frames may still be rendered in any order.
 // Determinism: every random number comes from SynthRng streams of the seed (random.hpp), so a
 // seed gives the same sequence on every run and platform.
 // Thread-safety: renderFrame() uses the sequence's scratch buffers: one thread per sequence;
@@ -44,6 +51,7 @@
 #include "hawor/geometry/rotation.hpp"
 #include "hawor/hand/forward.hpp"
 #include "hawor/hand/hand_model.hpp"
+#include "hawor/synth/capture.hpp"
 #include "hawor/synth/hand_motion.hpp"
 #include "hawor/synth/hand_rig.hpp"
 #include "hawor/synth/presets.hpp"
@@ -65,6 +73,8 @@ struct SynthOptions {
   float noiseSigma = -1;   ///< pixel noise in grey levels; < 0: the preset's
   /// A hand is valid in a frame with at least max(1, round(fraction·W·H)) visible pixels.
   double minVisibleFraction = 2e-4;
+  /// The camera's capture effects (capture.hpp); the default is the clean capture.
+  CaptureOptions capture;
 };
 
 enum HandSideIndex { kLeftHand = 0, kRightHand = 1 };
@@ -90,6 +100,7 @@ struct SynthFrame {
   RenderedImages images;           ///< rgb, depth, mask (left label 128, right 255)
   SynthHandFrame<Scalar> hands[2];  ///< kLeftHand, kRightHand
   double coverage = 0;             ///< fraction of the image covered by hands
+  CaptureFrameInfo capture;        ///< sub-frames and gains of the capture model
 };
 
 template <typename Scalar>
@@ -121,10 +132,26 @@ class SynthSequence {
       scene = std::make_shared<const IndoorScene<Scalar>>(makeIndoorScene<Scalar>(seed, so));
     }
     scene_ = std::move(scene);
-    camera_ = PinholeCamera<Scalar>::fromFov(opt_.width, opt_.height, Scalar(opt_.fovDeg));
+    const CaptureOptions& co = opt_.capture;
+    lensD_ = co.lens;
+    lens_ = co.lens.template cast<Scalar>();
+    fovDeg_ = co.fovDeg > 0 ? co.fovDeg : opt_.fovDeg;
+    camera_ = lensIntrinsics<Scalar>(opt_.width, opt_.height, fovDeg_, lensD_);
     frames_ = opt_.frames > 0 ? opt_.frames : preset_.frames;
-    noise_ = opt_.noiseSigma >= 0 ? opt_.noiseSigma : preset_.noiseSigma;
+    const double readNoise = co.readNoise >= 0 ? co.readNoise : opt_.noiseSigma >= 0 ? opt_.noiseSigma : preset_.noiseSigma;
+    noise_ = static_cast<float>(readNoise);
     plan();
+    if (co.usesPipeline()) {
+      const double duration = static_cast<double>(frames_ - 1) / opt_.fps + 1e-9;
+      if (co.aeDrift > 0) {
+        SynthRng rng(seed_, 20);
+        aeDrift_ = SmoothSignal<Scalar>(rng, duration, 2.0, 1, VecX<Scalar>::Constant(1, Scalar(co.aeDrift)));
+      }
+      if (co.wbDrift > 0) {
+        SynthRng rng(seed_, 21);
+        wbDrift_ = SmoothSignal<Scalar>(rng, duration, 4.0, 2, VecX<Scalar>::Constant(2, Scalar(co.wbDrift)));
+      }
+    }
   }
 
   const SynthPreset& preset() const { return preset_; }
@@ -132,7 +159,24 @@ class SynthSequence {
   const SynthOptions& options() const { return opt_; }
   int numFrames() const { return frames_; }
   double fps() const { return opt_.fps; }
+  /// The intrinsics (with lens(): the camera; PinholeCamera::project alone is right only for a
+  /// pinhole lens).
   const PinholeCamera<Scalar>& camera() const { return camera_; }
+  /// The lens (capture.hpp; pinhole unless SynthOptions::capture sets one).
+  const Lens<Scalar>& lens() const { return lens_; }
+  /// The lens with the coefficients as given (double), e.g. for Lens::toString().
+  const Lens<double>& lensDouble() const { return lensD_; }
+  /// The read noise σ_r in grey levels (capture.hpp; the plain renderer's noise without capture
+  /// effects).
+  float readNoise() const { return noise_; }
+  /// The diagonal field of view through the lens, degrees.
+  double fovDeg() const { return fovDeg_; }
+  /// The camera: intrinsics and lens.
+  CameraModel<Scalar> cameraModel() const { return CameraModel<Scalar>{camera_, lens_}; }
+  /// Pixel of a camera-frame point through the intrinsics and the lens.
+  Vec2<Scalar> project(const Vec3<Scalar>& p) const {
+    return lens_.kind == LensKind::Pinhole ? camera_.project(p) : cameraModel().project(p);
+  }
   const IndoorScene<Scalar>& scene() const { return *scene_; }
   std::shared_ptr<const IndoorScene<Scalar>> sharedScene() const { return scene_; }
   const HandModel<Scalar>& model(int side) const { return *models_[checkSide(side)]; }
@@ -171,13 +215,11 @@ class SynthSequence {
   /// Renders frame i and fills its ground truth.
   void renderFrame(int i, SynthFrame<Scalar>& out) {
     const std::size_t fi = checkFrame(i);
-    if (!renderer_) renderer_ = std::make_unique<SceneRenderer<Scalar>>(*scene_, camera_);
     out.index = i;
     out.time = static_cast<double>(i) / opt_.fps;
     out.worldFromCamera = worldFromCamera(i);
     const RigidPose<Scalar> cw = out.worldFromCamera.inverse();
     std::vector<HandMeshView<Scalar>> views;
-    static const Rgb skin[2] = {Rgb(222.0f, 168.0f, 138.0f), Rgb(214.0f, 160.0f, 128.0f)};
     for (int s = 0; s < 2; ++s) {
       SynthHandFrame<Scalar>& h = out.hands[s];
       h.world = poses_[static_cast<std::size_t>(s)][fi];
@@ -187,22 +229,43 @@ class SynthSequence {
       for (Eigen::Index k = 0; k < h.jointsWorld.rows(); ++k) {
         h.jointsCam.row(k) = (cw.R * h.jointsWorld.row(k).transpose() + cw.t).transpose();
         const Vec3<Scalar> p = h.jointsCam.row(k).transpose();
-        h.inImage[static_cast<std::size_t>(k)] = p.z() > Scalar(0.01) && camera_.inImage(camera_.project(p));
+        h.inImage[static_cast<std::size_t>(k)] = p.z() > Scalar(0.01) && camera_.inImage(project(p));
       }
       h.camera = handPoseCamera(s, i);
-      Points3<Scalar>& v = handVerts_[static_cast<std::size_t>(s)];
-      v.resize(fwd_.vertices.rows(), 3);
-      for (Eigen::Index k = 0; k < v.rows(); ++k) v.row(k) = (cw.R * fwd_.vertices.row(k).transpose() + cw.t).transpose();
-      HandMeshView<Scalar> view;
-      view.vertices = &v;
-      view.faces = &models_[static_cast<std::size_t>(s)]->faces;
-      view.albedo = skin[s];
-      view.label = s == kLeftHand ? kLeftLabel : kRightLabel;
-      views.push_back(view);
+      toCamera(fwd_.vertices, cw, handVerts_[static_cast<std::size_t>(s)]);
+      views.push_back(handView(s, handVerts_[static_cast<std::size_t>(s)]));
     }
     const std::uint32_t noiseSeed = hash3(static_cast<std::uint32_t>(seed_), static_cast<std::uint32_t>(seed_ >> 32),
                                           static_cast<std::uint32_t>(i));
-    renderer_->render(roomFromCamera_[fi], views, noise_, noiseSeed, out.images);
+    out.capture = CaptureFrameInfo();
+    if (!opt_.capture.usesPipeline()) {
+      if (!renderer_) renderer_ = std::make_unique<SceneRenderer<Scalar>>(*scene_, camera_);
+      renderer_->render(roomFromCamera_[fi], views, noise_, noiseSeed, out.images);
+    } else {
+      const CaptureOptions& co = opt_.capture;
+      if (!capture_) capture_ = std::make_unique<CaptureRenderer<Scalar>>(*scene_, camera_, lensD_, co.exposure, co.readout);
+      CaptureFrameInfo& info = out.capture;
+      CaptureExposure ex;
+      if (co.hasShutter()) {
+        if (co.subframes > 0) {
+          info.subframes = co.subframes | 1;
+        } else {
+          info.motionPx = imageMotion(i, 0.5 * capture_->timing().span());
+          info.subframes = adaptiveSubframes(info.motionPx, co);
+        }
+      }
+      info.exposureGain = exposureGain(i);
+      whiteBalance(i, info.whiteBalance);
+      ex.subframes = info.subframes;
+      ex.illumination = co.illumination;
+      for (int c = 0; c < 3; ++c) ex.channelGain[c] = info.exposureGain * info.whiteBalance[c];
+      ex.readNoise = noise_;
+      ex.shotNoise = co.shotNoise;
+      ex.noiseSeed = hashCombine(noiseSeed, 0x43415054u);
+      capture_->render([&](double tau, RigidPose<Scalar>& roomFromCam, std::vector<HandMeshView<Scalar>>& hv) {
+        stateAt(i, tau, roomFromCam, hv);
+      }, ex, out.images);
+    }
     const int need = minVisiblePixels();
     int covered = 0;
     for (int s = 0; s < 2; ++s) {
@@ -211,6 +274,58 @@ class SynthSequence {
       covered += out.hands[s].visiblePixels;
     }
     out.coverage = static_cast<double>(covered) / (static_cast<double>(opt_.width) * opt_.height);
+  }
+
+  /// The exposure gain g of frame i (capture.hpp: auto-exposure or the fixed gain, with drift).
+  /// Auto-exposure meters frames 0 … i − 1 (cached).
+  double exposureGain(int i) {
+    checkFrame(i);
+    const CaptureOptions& co = opt_.capture;
+    double lg = std::log(co.gain);
+    if (co.aeTime > 0) {
+      while (static_cast<int>(aeLog_.size()) <= i) {
+        const int k = static_cast<int>(aeLog_.size());
+        const AutoExposure ae{co, opt_.fps};
+        aeLog_.push_back(k == 0 ? ae.target(meter(0)) : ae.step(aeLog_.back(), meter(k - 1)));
+      }
+      lg = aeLog_[static_cast<std::size_t>(i)];
+    }
+    if (aeDrift_.dims() >= 1) lg += static_cast<double>(aeDrift_(static_cast<double>(i) / opt_.fps, 0));
+    return std::min(co.aeMaxGain, std::max(co.aeMinGain, std::exp(lg)));
+  }
+
+  /// The white-balance gains (b_r, 1, b_b) of frame i (capture.hpp).
+  void whiteBalance(int i, double b[3]) const {
+    checkFrame(i);
+    b[0] = b[1] = b[2] = 1;
+    if (wbDrift_.dims() < 2) return;
+    const double t = static_cast<double>(i) / opt_.fps;
+    for (int c = 0; c < 2; ++c) {
+      const double v = std::exp(static_cast<double>(wbDrift_(t, c)));
+      b[2 * c] = std::min(std::exp(0.25), std::max(std::exp(-0.25), v));
+    }
+  }
+
+  /// The auto-exposure's metered grey of frame i at unit gain (capture.hpp; cached).
+  double meter(int i) {
+    const std::size_t fi = checkFrame(i);
+    if (meter_.size() <= fi) meter_.resize(fi + 1, -1.0);
+    if (meter_[fi] >= 0) return meter_[fi];
+    if (!meterRenderer_) {
+      const int mw = 64, mh = std::max(16, static_cast<int>(std::lround(64.0 * opt_.height / opt_.width)));
+      meterRenderer_ = std::make_unique<SceneRenderer<Scalar>>(
+          *scene_, PinholeCamera<Scalar>::fromFov(mw, mh, Scalar(std::min(fovDeg_, 120.0))));
+    }
+    const RigidPose<Scalar> cw = worldFromCamera(i).inverse();
+    std::vector<HandMeshView<Scalar>> views;
+    for (int s = 0; s < 2; ++s) {
+      forward(*models_[static_cast<std::size_t>(s)], poses_[static_cast<std::size_t>(s)][fi], ws_, fwd_);
+      toCamera(fwd_.vertices, cw, subVerts_[static_cast<std::size_t>(s)]);
+      views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
+    }
+    meterRenderer_->renderLinear(roomFromCamera_[fi], views, meterRgb_, meterGeo_);
+    meter_[fi] = meteredGrey(meterRgb_);
+    return meter_[fi];
   }
 
  private:
@@ -226,6 +341,15 @@ class SynthSequence {
       throw Error("synth: minVisibleFraction must be in [0, 1)");
     }
     if (!std::isfinite(opt_.noiseSigma) || opt_.noiseSigma > 100) throw Error("synth: noiseSigma must be finite and <= 100");
+    const CaptureOptions& co = opt_.capture;
+    co.validate();
+    const double interval = 1.0 / opt_.fps;
+    if (co.exposure > interval || co.readout > interval) {
+      throw Error("synth: capture " + std::string(co.exposure > interval ? "exposure " : "readout ") +
+                  capture_detail::shortest(co.exposure > interval ? co.exposure : co.readout) +
+                  " s exceeds the frame interval " + capture_detail::shortest(interval) + " s at " +
+                  capture_detail::shortest(opt_.fps) + " fps");
+    }
     if (preset_.frames < 1) throw Error("synth: preset '" + preset_.name + "' has no default length");
   }
   static int checkSide(int side) {
@@ -243,9 +367,9 @@ class SynthSequence {
   void plan() {
     const double duration = static_cast<double>(frames_ - 1) / opt_.fps + 1e-9;
     SynthRng camRng(seed_, 1);
-    const CameraPath<Scalar> path = makeCameraPath<Scalar>(preset_.motion, scene_->layout, duration, camRng);
+    path_ = makeCameraPath<Scalar>(preset_.motion, scene_->layout, duration, camRng);
     roomFromCamera_.resize(static_cast<std::size_t>(frames_));
-    for (int i = 0; i < frames_; ++i) roomFromCamera_[static_cast<std::size_t>(i)] = path.at(static_cast<double>(i) / opt_.fps);
+    for (int i = 0; i < frames_; ++i) roomFromCamera_[static_cast<std::size_t>(i)] = path_.at(static_cast<double>(i) / opt_.fps);
     worldFromRoom_ = roomFromCamera_[0].inverse();
     // Head frame: exponentially smoothed camera rotation.
     const double lag = preset_.hands.lagSeconds;
@@ -355,12 +479,88 @@ class SynthSequence {
     }
   }
 
+  // Camera-frame copy of world-frame points.
+  static void toCamera(const Points3<Scalar>& world, const RigidPose<Scalar>& cw, Points3<Scalar>& cam) {
+    cam.resize(world.rows(), 3);
+    for (Eigen::Index k = 0; k < cam.rows(); ++k) cam.row(k) = (cw.R * world.row(k).transpose() + cw.t).transpose();
+  }
+  HandMeshView<Scalar> handView(int s, const Points3<Scalar>& verts) const {
+    static const Rgb skin[2] = {Rgb(222.0f, 168.0f, 138.0f), Rgb(214.0f, 160.0f, 128.0f)};
+    HandMeshView<Scalar> view;
+    view.vertices = &verts;
+    view.faces = &models_[static_cast<std::size_t>(s)]->faces;
+    view.albedo = skin[s];
+    view.label = s == kLeftHand ? kLeftLabel : kRightLabel;
+    return view;
+  }
+  // World-frame hand parameters at frame position u = i + τ·fps (interpolated between frames,
+  // held before the first and after the last).
+  HandPose<Scalar> handPoseAt(int s, int i, double tau) const {
+    const std::vector<HandPose<Scalar>>& P = poses_[static_cast<std::size_t>(s)];
+    if (tau == 0) return P[static_cast<std::size_t>(i)];
+    const double u = std::min(static_cast<double>(frames_ - 1), std::max(0.0, i + tau * opt_.fps));
+    const int j = std::min(frames_ - 1, static_cast<int>(std::floor(u)));
+    if (j + 1 >= frames_) return P[static_cast<std::size_t>(j)];
+    return interpolateHandPose(P[static_cast<std::size_t>(j)], P[static_cast<std::size_t>(j) + 1], Scalar(u - j));
+  }
+  // The state of frame i at its reference time + τ (capture.hpp): the camera from the continuous
+  // path (the frame's own pose at τ = 0), the hands interpolated; vertices in subVerts_.
+  void stateAt(int i, double tau, RigidPose<Scalar>& roomFromCam, std::vector<HandMeshView<Scalar>>& views) {
+    RigidPose<Scalar> cw;
+    if (tau == 0) {
+      roomFromCam = roomFromCamera_[static_cast<std::size_t>(i)];
+      cw = worldFromCamera(i).inverse();
+    } else {
+      roomFromCam = path_.at(static_cast<double>(i) / opt_.fps + tau);
+      cw = (worldFromRoom_ * roomFromCam).inverse();
+    }
+    views.clear();
+    for (int s = 0; s < 2; ++s) {
+      forward(*models_[static_cast<std::size_t>(s)], handPoseAt(s, i, tau), ws_, fwd_);
+      toCamera(fwd_.vertices, cw, subVerts_[static_cast<std::size_t>(s)]);
+      views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
+    }
+  }
+  // Image motion (pixels) of frame i between τ = −h and +h: the camera's rotation × f, its
+  // translation × f / 0.5 m, and the hands' keypoints in front of the camera as projected.
+  double imageMotion(int i, double h) {
+    RigidPose<Scalar> a, b;
+    std::vector<HandMeshView<Scalar>> unused;
+    const double f = static_cast<double>(std::max(camera_.fx, camera_.fy));
+    Points3<Scalar> ka[2], kb[2];
+    for (int e = 0; e < 2; ++e) {
+      const double tau = e == 0 ? -h : h;
+      RigidPose<Scalar>& P = e == 0 ? a : b;
+      P = path_.at(static_cast<double>(i) / opt_.fps + tau);
+      const RigidPose<Scalar> cw = (worldFromRoom_ * P).inverse();
+      for (int s = 0; s < 2; ++s) {
+        forward(*models_[static_cast<std::size_t>(s)], handPoseAt(s, i, tau), ws_, fwd_);
+        toCamera(fwd_.keypoints, cw, e == 0 ? ka[s] : kb[s]);
+      }
+    }
+    const double angle = static_cast<double>(matrixToAxisAngle(Mat3<Scalar>(a.R.transpose() * b.R)).norm());
+    double motion = f * (angle + static_cast<double>((a.t - b.t).norm()) / 0.5);
+    for (int s = 0; s < 2; ++s) {
+      for (Eigen::Index k = 0; k < ka[s].rows(); ++k) {
+        const Vec3<Scalar> p = ka[s].row(k).transpose(), q = kb[s].row(k).transpose();
+        if (!(p.z() > Scalar(0.05) && q.z() > Scalar(0.05))) continue;
+        const Vec2<Scalar> d = camera_.project(p) - camera_.project(q);
+        motion = std::max(motion, static_cast<double>(d.norm()));
+      }
+    }
+    return motion;
+  }
+
   SynthPreset preset_;
   std::uint64_t seed_ = 0;
   SynthOptions opt_;
   int frames_ = 0;
   float noise_ = 0;
+  double fovDeg_ = 90;
   PinholeCamera<Scalar> camera_;
+  Lens<Scalar> lens_;
+  Lens<double> lensD_;
+  CameraPath<Scalar> path_;
   std::shared_ptr<const IndoorScene<Scalar>> scene_;
   std::shared_ptr<const HandModel<Scalar>> models_[2];
   std::shared_ptr<const HandRig<Scalar>> rigs_[2];
@@ -373,6 +573,14 @@ class SynthSequence {
   HandWorkspace<Scalar> ws_;
   HandOutput<Scalar> fwd_;
   Points3<Scalar> handVerts_[2];
+  // Capture: renderer, sub-frame hand vertices, metering, drifts (capture.hpp).
+  std::unique_ptr<CaptureRenderer<Scalar>> capture_;
+  Points3<Scalar> subVerts_[2];
+  std::unique_ptr<SceneRenderer<Scalar>> meterRenderer_;
+  ImageF meterRgb_;
+  RenderedImages meterGeo_;
+  std::vector<double> meter_, aeLog_;
+  SmoothSignal<Scalar> aeDrift_, wbDrift_;
 };
 
 }  // namespace synth

@@ -1,6 +1,6 @@
 // hawor/synth/synth.hpp — synthetic egocentric sequences with ground truth:
 // procedural textures → indoor scene → head-like camera paths → hand rig and hand motion →
-// renderer → presets → sequence → PNG / npy / npz / TUM writer.
+// renderer → capture effects → presets → sequence → PNG / npy / npz / TUM writer.
 #pragma once
 
 #include "random.hpp"
@@ -10,6 +10,7 @@
 #include "hand_rig.hpp"
 #include "hand_motion.hpp"
 #include "renderer.hpp"
+#include "capture.hpp"
 #include "presets.hpp"
 #include "sequence.hpp"
 #include "png.hpp"

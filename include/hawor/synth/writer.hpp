@@ -16,9 +16,17 @@
 //                              visible_pixels (T,) int32     pixels where the hand is nearest
 //                              kp_in_image (T,21) bool       keypoint in front and inside image
 //                            and timestamps (T,) float64
-//   DIR/intrinsics.txt       one line "fx fy cx cy width height fps"
-//   DIR/meta.json            preset, seed, sizes, mask labels, gravity in the world frame, and
-//                            the caller's extra string fields (e.g. the hand-model files)
+//   DIR/intrinsics.txt       one line "fx fy cx cy width height fps"; with capture effects a
+//                            second line "lens SPEC" (Lens::toString: pinhole, opencv:k1,k2,p1,p2,k3
+//                            or fisheye:k1,k2,k3,k4; pixel = (fx·m.x + cx, fy·m.y + cy) of the
+//                            lens's distorted normalised m)
+//   DIR/capture.json         with capture effects only: the settings (capture.hpp), the encoding
+//                            a benchmark should apply (ffmpeg arguments for this size), and per
+//                            frame the sub-frames, the exposure gain and the white balance
+//   DIR/meta.json            preset, seed, sizes, mask labels, gravity in the world frame, the
+//                            capture profile (with capture effects), and the caller's extra
+//                            string fields (e.g. the hand-model files)
+// The clean capture (CaptureOptions::isClean) writes neither the lens line nor capture.json.
 // The world frame is the first camera's frame (sequence.hpp). Folders are created as needed;
 // existing files of the same names are replaced. Deterministic: the same sequence writes the
 // same bytes.
@@ -68,6 +76,7 @@ struct SynthWriteSummary {
   int framesCovered20 = 0;       ///< frames with hand coverage >= 20 %
   std::vector<double> renderMs;  ///< per frame: generation and rendering
   std::vector<double> writeMs;   ///< per frame: PNG / npy encoding and writing
+  std::vector<int> subframes;    ///< per frame: sub-frames rendered (capture.hpp)
 };
 
 namespace writer_detail {
@@ -102,6 +111,53 @@ inline double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// capture.json (file comment): settings, encoding, per-frame gains.
+template <typename Scalar>
+std::string captureJson(const SynthSequence<Scalar>& seq, const std::vector<CaptureFrameInfo>& frames) {
+  const CaptureOptions& c = seq.options().capture;
+  auto num = [](double v) { return detail::formatShortest(v, false); };
+  const int W = seq.camera().width, H = seq.camera().height;
+  std::string j = "{\n";
+  j += "  \"profile\": " + jsonQuote(c.profile) + ",\n";
+  j += "  \"exposure_s\": " + num(c.exposure) + ",\n  \"readout_s\": " + num(c.readout) + ",\n";
+  j += "  \"row_window\": \"row r is exposed over t + (r - (H-1)/2)/H * readout_s -/+ exposure_s/2; t = frame / fps is "
+       "the ground truth's time (the middle row's mid-exposure)\",\n";
+  j += "  \"subframes\": " + std::to_string(c.subframes) + ",\n  \"max_subframes\": " + std::to_string(c.maxSubframes) +
+       ",\n  \"subframe_step_px\": " + num(c.subframeStepPx) + ",\n";
+  j += "  \"illumination\": " + num(c.illumination) + ",\n  \"gain\": " + num(c.gain) + ",\n";
+  j += "  \"read_noise\": " + num(c.readNoise >= 0 ? c.readNoise : -1) + ",\n  \"read_noise_used\": " +
+       num(static_cast<double>(seq.readNoise())) + ",\n  \"shot_noise\": " + num(c.shotNoise) + ",\n";
+  j += "  \"auto_exposure\": {\"time_constant_s\": " + num(c.aeTime) + ", \"target\": " + num(c.aeTarget) +
+       ", \"min_gain\": " + num(c.aeMinGain) + ", \"max_gain\": " + num(c.aeMaxGain) + ", \"drift\": " + num(c.aeDrift) +
+       "},\n";
+  j += "  \"white_balance_drift\": " + num(c.wbDrift) + ",\n";
+  j += "  \"lens\": " + jsonQuote(seq.lensDouble().toString()) + ",\n  \"fov_deg\": " + num(seq.fovDeg()) + ",\n";
+  const EncodeSpec::Resolved e = c.encode.resolve(W, H, seq.fps());
+  j += "  \"encode\": {\"spec\": " + jsonQuote(c.encode.toString());
+  if (!c.encode.none()) {
+    j += ", \"codec\": " + jsonQuote(c.encode.codec) + ", \"width\": " + std::to_string(e.width) +
+         ", \"height\": " + std::to_string(e.height) + ", \"kbps\": " + num(std::round(e.kbps)) + ", \"crf\": " +
+         std::to_string(c.encode.crf) + ", \"ffmpeg_args\": [";
+    for (std::size_t k = 0; k < e.ffmpegArgs.size(); ++k) j += (k ? ", " : "") + jsonQuote(e.ffmpegArgs[k]);
+    j += "]";
+  }
+  j += "},\n";
+  auto list = [&](const char* key, auto get) {
+    j += std::string("  \"") + key + "\": [";
+    for (std::size_t k = 0; k < frames.size(); ++k) j += (k ? ", " : "") + get(frames[k]);
+    j += "]";
+  };
+  list("frame_subframes", [](const CaptureFrameInfo& f) { return std::to_string(f.subframes); });
+  j += ",\n";
+  list("frame_gain", [&](const CaptureFrameInfo& f) { return num(f.exposureGain); });
+  j += ",\n";
+  list("frame_white_balance", [&](const CaptureFrameInfo& f) {
+    return "[" + num(f.whiteBalance[0]) + ", " + num(f.whiteBalance[1]) + ", " + num(f.whiteBalance[2]) + "]";
+  });
+  j += "\n}\n";
+  return j;
+}
+
 }  // namespace writer_detail
 
 /// Renders every frame of `seq` and writes the layout of the file comment into `dir`.
@@ -131,6 +187,7 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
     arr[s].betaDim = static_cast<std::size_t>(seq.model(s).numBetas());
   }
   std::vector<TumPose<Scalar>> traj(static_cast<std::size_t>(T));
+  std::vector<CaptureFrameInfo> captured;
   std::vector<double> stamps(static_cast<std::size_t>(T));
   SynthFrame<Scalar> fr;
   double covSum = 0;
@@ -179,6 +236,8 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
     covSum += fr.coverage;
     sum.coverageMax = std::max(sum.coverageMax, fr.coverage);
     if (fr.coverage >= 0.2) ++sum.framesCovered20;
+    captured.push_back(fr.capture);
+    sum.subframes.push_back(fr.capture.subframes);
     if (options.progress) options.progress(i + 1, T);
   }
   sum.coverageMean = T > 0 ? covSum / T : 0;
@@ -214,7 +273,9 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
                            detail::formatShortest(static_cast<double>(cam.cx), false) + " " +
                            detail::formatShortest(static_cast<double>(cam.cy), false) + " " + std::to_string(cam.width) +
                            " " + std::to_string(cam.height) + " " + detail::formatShortest(seq.fps(), false) + "\n";
-  writeFileText(base + "intrinsics.txt", intr);
+  const CaptureOptions& co = seq.options().capture;
+  writeFileText(base + "intrinsics.txt", co.isClean() ? intr : intr + "lens " + seq.lensDouble().toString() + "\n");
+  if (!co.isClean()) writeFileText(base + "capture.json", captureJson(seq, captured));
   // meta.json
   const Vec3<Scalar> g = seq.gravityWorld();
   std::string m = "{\n";
@@ -227,6 +288,7 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
   m += "  \"gravity_world\": [" + detail::formatShortest(static_cast<double>(g.x()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.y()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.z()), false) + "],\n";
+  if (!co.isClean()) m += "  \"capture\": " + jsonQuote(co.profile) + ",\n";
   m += "  \"mask_labels\": {\"left\": " + std::to_string(int(SynthSequence<Scalar>::kLeftLabel)) +
        ", \"right\": " + std::to_string(int(SynthSequence<Scalar>::kRightLabel)) + "},\n";
   m += "  \"hand_joints\": {\"left\": " + std::to_string(seq.model(kLeftHand).numJoints()) +
