@@ -4,10 +4,17 @@ hands_gt.npz, intrinsics.txt), shapes and dtypes read back with numpy and an ind
 world frames against the TUM poses, projections of joints_cam with the intrinsics against the mask,
 visibility flags against the mask), identical bytes for a repeated run and different ones for
 another seed, `--list`, and usage errors (exit code 2 with a message) including unknown presets.
+Capture profiles (`--capture`): clean gives the same bytes as no profile; a profile writes
+intrinsics.txt's lens line (the first line still read by `read -r fx fy cx cy w h fps`),
+capture.json with the encoding's ffmpeg arguments (run through ffmpeg when present) and per-frame
+gains; kp_in_image through the lens against OpenCV's projectPoints / fisheye.projectPoints (numpy
+formulas without OpenCV) and the joints projected through the lens onto the mask; options
+override a profile's fields; bad profiles and values are usage errors naming them.
 Run: /usr/bin/python3 test_synth_cli.py path/to/hawor
 """
 import json
 import os
+import shutil
 import struct
 import subprocess
 import sys
@@ -23,6 +30,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 HAWOR = os.path.abspath(sys.argv[1])
 PRESETS = ["walk", "table_work", "fast_turns", "pure_rotation", "hands_cover"]
+PROFILES = ["clean", "phone", "action_cam", "aria", "low_light", "webcam_360p"]
 T, W, H = 10, 320, 240
 
 
@@ -190,10 +198,141 @@ def layout_and_consistency(d, summary, model_joints):
     return cover
 
 
+def project_lens(lens, jc, fx, fy, cx, cy):
+    """Pixels of camera points through a hawor lens string, with OpenCV when it is installed (an
+    independent implementation), else the formulas of include/hawor/geometry/lens.hpp in numpy."""
+    name, _, rest = lens.partition(":")
+    k = [float(v) for v in rest.split(",")] if rest else []
+    K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
+    try:
+        import cv2
+        pts = jc.reshape(-1, 1, 3).astype(np.float64)
+        if name == "fisheye":
+            uv, _ = cv2.fisheye.projectPoints(pts, np.zeros((3, 1)), np.zeros((3, 1)), K, np.array(k))
+        else:
+            uv, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), K, np.array(k if k else [0.0] * 5))
+        return uv.reshape(-1, 2)
+    except ImportError:
+        pass
+    x, y, z = jc[:, 0], jc[:, 1], jc[:, 2]
+    if name == "fisheye":
+        r = np.hypot(x, y)
+        t = np.arctan2(r, z)
+        td = t * (1 + k[0] * t**2 + k[1] * t**4 + k[2] * t**6 + k[3] * t**8)
+        s = np.where(r > 0, td / np.maximum(r, 1e-300), 1 / z)
+        mx, my = s * x, s * y
+    else:
+        xn, yn = x / z, y / z
+        if name == "opencv":
+            k1, k2, p1, p2, k3 = (k + [0.0])[:5]
+            r2 = xn * xn + yn * yn
+            a = 1 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+            mx = xn * a + 2 * p1 * xn * yn + p2 * (r2 + 2 * xn * xn)
+            my = yn * a + p1 * (r2 + 2 * yn * yn) + 2 * p2 * xn * yn
+        else:
+            mx, my = xn, yn
+    return np.stack([fx * mx + cx, fy * my + cy], 1)
+
+
+def capture_cases(tmp):
+    base = ["--seed", "3", "--frames", "4", "--model", "synthetic"]
+    # clean: the same bytes as without a profile.
+    d0, d1 = os.path.join(tmp, "cap_none"), os.path.join(tmp, "cap_clean")
+    rc0, _, se0 = run("--preset", "walk", *base, "--size", "64x48", "--out", d0)
+    rc1, so1, se1 = run("--preset", "walk", *base, "--size", "64x48", "--capture", "clean", "--out", d1)
+    check("capture clean runs", rc0 == 0 and rc1 == 0, se0 + se1)
+    if rc0 == 0 and rc1 == 0:
+        same = files_of(d0) == files_of(d1) and all(
+            open(os.path.join(d0, f), "rb").read() == open(os.path.join(d1, f), "rb").read() for f in files_of(d0))
+        check("capture clean: identical files, no capture.json", same and "capture.json" not in files_of(d1))
+        check("capture clean summary", json.loads(so1)["capture"] == "clean" and json.loads(so1)["lens"] == "pinhole", so1)
+    # Lens profiles: the lens line, capture.json, kp_in_image and the mask through the lens.
+    for profile, lens_kind in (("aria", "fisheye"), ("action_cam", "opencv"), ("phone", "pinhole")):
+        d = os.path.join(tmp, "cap_" + profile)
+        rc, so, se = run("--preset", "hands_cover", *base, "--size", "96x72", "--capture", profile, "--out", d)
+        check("capture %s runs" % profile, rc == 0, se)
+        if rc != 0:
+            continue
+        summary = json.loads(so)
+        check("capture %s summary" % profile, summary["capture"] == profile and summary["lens"].startswith(lens_kind)
+              and summary["subframes_mean"] >= 1, summary)
+        # The scripts' reader: the first line as before.
+        sh = subprocess.run(["bash", "-c", 'read -r fx fy cx cy w h fps < "$1"; echo "$w $h $fps"', "_",
+                             os.path.join(d, "intrinsics.txt")], capture_output=True, text=True)
+        check("capture %s: read -r of intrinsics.txt" % profile, sh.stdout.split() == ["96", "72", "30"], sh.stdout)
+        lines = open(os.path.join(d, "intrinsics.txt")).read().splitlines()
+        fx, fy, cx, cy = map(float, lines[0].split()[:4])
+        check("capture %s: lens line" % profile, len(lines) == 2 and lines[1].split()[0] == "lens"
+              and lines[1].split()[1].startswith(lens_kind) and lines[1].split()[1] == summary["lens"], lines)
+        lens = lines[1].split()[1]
+        cj = json.load(open(os.path.join(d, "capture.json")))
+        check("capture %s: capture.json" % profile, cj["profile"] == profile and cj["lens"] == lens
+              and len(cj["frame_gain"]) == 4 and len(cj["frame_white_balance"]) == 4 and len(cj["frame_subframes"]) == 4, cj)
+        meta = json.load(open(os.path.join(d, "meta.json")))
+        check("capture %s: meta" % profile, meta.get("capture") == profile, meta)
+        z = np.load(os.path.join(d, "hands_gt.npz"))
+        labels = {"left": 128, "right": 255}
+        on = total = 0
+        for i in range(4):
+            mask = load_png(os.path.join(d, "mask", "%06d.png" % i))
+            for side in ("left", "right"):
+                jc = z[side + "_joints_cam"][i]
+                uv = project_lens(lens, jc, fx, fy, cx, cy)
+                inside = (jc[:, 2] > 0.01) & (uv[:, 0] >= -0.5) & (uv[:, 1] >= -0.5) & (uv[:, 0] <= 95.5) & (uv[:, 1] <= 71.5)
+                border = (np.abs(uv[:, 0] + 0.5) < 1e-6) | (np.abs(uv[:, 0] - 95.5) < 1e-6) | (np.abs(uv[:, 1] + 0.5) < 1e-6) | (np.abs(uv[:, 1] - 71.5) < 1e-6)
+                flags = z[side + "_kp_in_image"][i]
+                check("capture %s: kp_in_image through the lens %s %d" % (profile, side, i), (inside == flags)[~border].all(),
+                      (inside.astype(int), flags.astype(int)))
+                if not z[side + "_valid"][i]:
+                    continue
+                for k in np.nonzero(inside)[0]:
+                    x, y = int(round(uv[k, 0])), int(round(uv[k, 1]))
+                    total += 1
+                    on += int((mask[max(0, y - 2):y + 3, max(0, x - 2):x + 3] == labels[side]).any())
+        check("capture %s: joints through the lens on their mask" % profile, total > 20 and on >= 0.85 * total, (on, total))
+        # The encoding a benchmark applies: ffmpeg takes the arguments as written.
+        enc = cj["encode"]
+        if enc.get("ffmpeg_args") and shutil.which("ffmpeg"):
+            out = os.path.join(d, "video.mp4")
+            p = subprocess.run(["ffmpeg", "-v", "error", "-y", "-framerate", "30", "-i", os.path.join(d, "rgb", "%06d.png")] +
+                               enc["ffmpeg_args"] + [out], capture_output=True, text=True, timeout=120)
+            check("capture %s: ffmpeg encodes with capture.json's arguments" % profile, p.returncode == 0 and os.path.getsize(out) > 0, p.stderr)
+    # Options override the profile's fields.
+    d = os.path.join(tmp, "cap_mix")
+    rc, so, se = run("--preset", "walk", *base, "--size", "64x48", "--capture", "phone", "--exposure", "0.02",
+                     "--lens", "fisheye:0.01,0,0,0", "--fov", "140", "--noise", "3", "--out", d)
+    check("capture override runs", rc == 0, se)
+    if rc == 0:
+        cj = json.load(open(os.path.join(d, "capture.json")))
+        check("capture overrides", cj["exposure_s"] == 0.02 and cj["readout_s"] == 0.025 and cj["lens"] == "fisheye:0.01,0,0,0"
+              and cj["fov_deg"] == 140 and cj["read_noise_used"] == 3 and cj["profile"] == "phone+exposure,lens,fov", cj)
+    # Errors: exit code 2, the profile or option named.
+    out = os.path.join(tmp, "cap_err")
+    walk = ["--preset", "walk", *base, "--size", "32x24", "--out", out]
+    cases = [
+        ("unknown profile", ["--capture", "cinema"], "cinema"),
+        ("bad exposure", ["--capture", "phone", "--exposure", "fast"], "--exposure"),
+        ("exposure too long", ["--capture", "phone", "--exposure", "0.05"], "--exposure"),
+        ("bad lens", ["--lens", "kb:1,2"], "--lens"),
+        ("lens folds", ["--capture", "action_cam", "--fov", "160"], "folds"),
+        ("bad encode", ["--encode", "mpeg2"], "mpeg2"),
+        ("negative readout", ["--readout", "-1"], "readout"),
+        ("list with capture", ["--list", "--capture", "phone"], "--list"),
+    ]
+    for name, extra, needle in cases:
+        rc, so, se = run(*(walk + extra) if name != "list with capture" else extra)
+        check("capture usage: " + name, rc == 2 and needle in se, (rc, se))
+    rc, so, se = run(*walk, "--capture", "cinema")
+    check("unknown profile lists names", all(p in se for p in PROFILES), se)
+    check("nothing written on capture usage errors", not os.path.exists(out))
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         rc, so, se = run("--list")
-        check("list", rc == 0 and so.split() == PRESETS, (rc, so, se))
+        rows = [l.split(None, 2) for l in so.splitlines()]
+        check("list presets", rc == 0 and [r[1] for r in rows if r[0] == "preset"] == PRESETS, (rc, so, se))
+        check("list capture profiles", [r[1] for r in rows if r[0] == "capture"] == PROFILES and all(len(r) == 3 for r in rows), so)
         rc, so, se = run("--help")
         check("help", rc == 0 and "--preset" in so and "hands_gt.npz" in so, (rc, so))
 
@@ -265,6 +404,7 @@ def main():
         open(blocker, "w").write("x")
         rc, so, se = run(*base, "--out", os.path.join(blocker, "sub"))
         check("unwritable out", rc == 1 and "file" in se, (rc, se))
+        capture_cases(tmp)
     sys.exit(cliutil.finish())
 
 
