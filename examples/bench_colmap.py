@@ -6,8 +6,9 @@ frames of a `hawor synth` sequence and measure its camera trajectory against gro
                             [--threads N] [--colmap PATH]
     bench_colmap.py --self-test
 
-Pipeline (Debian colmap 3.8, CPU only): feature_extractor (one PINHOLE camera with the known
-intrinsics; with --masked the hand masks, inverted, as COLMAP ignores features where its mask
+Pipeline (Debian colmap 3.8, CPU only): feature_extractor (one camera with the known
+intrinsics: PINHOLE, or the sequence's lens from intrinsics.txt's 'lens' line as OPENCV,
+FULL_OPENCV or OPENCV_FISHEYE; with --masked the hand masks, inverted, as COLMAP ignores features where its mask
 is 0) -> sequential_matcher (default overlap, no loop detection) -> mapper (intrinsics fixed)
 -> model_converter (largest model to TXT) -> images.txt parsed into camera-to-world poses.
 
@@ -406,6 +407,31 @@ def self_test():
     dec = png_decode(png_encode(img, filters=(0, 1, 2, 3, 4)))
     check("PNG round trip over filters 0-4", dec.shape == img.shape and np.array_equal(dec, img))
 
+    # intrinsics.txt: one line, or with hawor synth --capture a 'lens' line; COLMAP's models.
+    d = tempfile.mkdtemp(prefix="bench_colmap_selftest_")
+    path = os.path.join(d, "intrinsics.txt")
+    with open(path, "w") as f:
+        f.write("400 400 319.5 239.5 640 480 30\n")
+    plain = read_intrinsics(path)
+    with open(path, "w") as f:
+        f.write("300 300 319.5 239.5 640 480 30\nlens fisheye:-0.0036,0.0368,-0.0343,0.0052\n")
+    fish = read_intrinsics(path)
+    with open(path, "w") as f:
+        f.write("300 300 319.5 239.5 640 480 30\nfocal 300\n")
+    try:
+        read_intrinsics(path)
+        bad = False
+    except BenchError:
+        bad = True
+    shutil.rmtree(d)
+    check("intrinsics.txt without a lens line is pinhole", plain[7] == "pinhole" and plain[4] == 640)
+    check("intrinsics.txt lens line", fish[7].startswith("fisheye:") and fish[0] == 300)
+    check("intrinsics.txt rejects other lines", bad)
+    check("COLMAP camera models", colmap_camera(1, 1, 0, 0, "pinhole")[0] == "PINHOLE"
+          and colmap_camera(1, 1, 0, 0, fish[7]) == ("OPENCV_FISHEYE", [1, 1, 0, 0, -0.0036, 0.0368, -0.0343, 0.0052])
+          and colmap_camera(1, 1, 0, 0, "opencv:-0.2,0.05,0,0,0")[0] == "OPENCV"
+          and len(colmap_camera(1, 1, 0, 0, "opencv:-0.26,0.07,0.0004,-0.0003,-0.0065")[1]) == 12)
+
     passed = sum(results)
     failed = len(results) - passed
     print("%d passed, %d failed" % (passed, failed))
@@ -434,20 +460,51 @@ def run_stage(colmap, stage, args, log_dir):
 
 
 def read_intrinsics(path):
+    """fx, fy, cx, cy, width, height, fps from the first line of a hawor synth intrinsics.txt, and
+    the lens: "pinhole" unless a second line 'lens SPEC' names one (hawor synth --capture:
+    "opencv:k1,k2,p1,p2,k3" or "fisheye:k1,k2,k3,k4", include/hawor/geometry/lens.hpp)."""
     try:
         with open(path) as f:
-            vals = f.read().split()
+            lines = [l.split() for l in f.read().splitlines() if l.strip()]
     except OSError as e:
         raise BenchError("cannot read intrinsics %s: %s" % (path, e.strerror))
+    vals = lines[0] if lines else []
     if len(vals) != 7:
-        raise BenchError("%s: expected 7 numbers 'fx fy cx cy width height fps', got %d" % (path, len(vals)))
+        raise BenchError("%s: expected 7 numbers 'fx fy cx cy width height fps' on the first line, got %d" % (path, len(vals)))
     try:
         fx, fy, cx, cy, w, h, fps = (float(v) for v in vals)
     except ValueError:
         raise BenchError("%s: non-numeric value in '%s'" % (path, " ".join(vals)))
     if not all(np.isfinite([fx, fy, cx, cy, w, h, fps])) or fx <= 0 or fy <= 0 or w < 1 or h < 1 or fps <= 0:
         raise BenchError("%s: invalid intrinsics %s" % (path, vals))
-    return fx, fy, cx, cy, int(w), int(h), fps
+    lens = "pinhole"
+    for l in lines[1:]:
+        if len(l) != 2 or l[0] != "lens":
+            raise BenchError("%s: expected 'lens SPEC' after the first line, got '%s'" % (path, " ".join(l)))
+        lens = l[1]
+    return fx, fy, cx, cy, int(w), int(h), fps, lens
+
+
+def colmap_camera(fx, fy, cx, cy, lens):
+    """COLMAP's camera model and parameters for intrinsics and a hawor lens string: PINHOLE,
+    OPENCV (k3 = 0) or FULL_OPENCV (k1, k2, p1, p2, k3, k4..k6 = 0), OPENCV_FISHEYE (the same
+    equidistant Kannala-Brandt k1..k4)."""
+    base = [fx, fy, cx, cy]
+    if lens == "pinhole":
+        return "PINHOLE", base
+    name, _, rest = lens.partition(":")
+    try:
+        k = [float(v) for v in rest.split(",")]
+    except ValueError:
+        raise BenchError("lens '%s': coefficients are not numbers" % lens)
+    if name == "opencv" and len(k) in (4, 5):
+        k = k + [0.0] * (5 - len(k))
+        if k[4] == 0:
+            return "OPENCV", base + k[:4]
+        return "FULL_OPENCV", base + k + [0.0, 0.0, 0.0]
+    if name == "fisheye" and len(k) == 4:
+        return "OPENCV_FISHEYE", base + k
+    raise BenchError("lens '%s': expected pinhole, opencv:k1,k2,p1,p2[,k3] or fisheye:k1,k2,k3,k4" % lens)
 
 
 def colmap_version(colmap):
@@ -502,7 +559,8 @@ def bench(opts):
     colmap = shutil.which(opts.colmap)
     if colmap is None:
         raise BenchError("colmap executable '%s' not found (Debian: apt-get install colmap)" % opts.colmap)
-    fx, fy, cx, cy, width, height, fps = read_intrinsics(os.path.join(seq, "intrinsics.txt"))
+    fx, fy, cx, cy, width, height, fps, lens = read_intrinsics(os.path.join(seq, "intrinsics.txt"))
+    camera_model, camera_params = colmap_camera(fx, fy, cx, cy, lens)
     rgb_dir = os.path.join(seq, "rgb")
     if not os.path.isdir(rgb_dir):
         raise BenchError("%s has no rgb/ folder" % seq)
@@ -557,8 +615,8 @@ def bench(opts):
         threads = str(opts.threads)
         extract = ["--database_path", db, "--image_path", os.path.abspath(rgb_dir),
                    "--image_list_path", os.path.join(work, "image_list.txt"),
-                   "--ImageReader.single_camera", 1, "--ImageReader.camera_model", "PINHOLE",
-                   "--ImageReader.camera_params", "%.17g,%.17g,%.17g,%.17g" % (fx, fy, cx, cy),
+                   "--ImageReader.single_camera", 1, "--ImageReader.camera_model", camera_model,
+                   "--ImageReader.camera_params", ",".join("%.17g" % v for v in camera_params),
                    "--SiftExtraction.use_gpu", 0, "--SiftExtraction.num_threads", threads]
         coverage = None
         if opts.masked:

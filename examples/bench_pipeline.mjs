@@ -89,18 +89,33 @@ export function readTumPositions(file) {
   return Float64Array.from(rows.flatMap((r) => [r[1], r[2], r[3]]));
 }
 
-/** Makes (or reuses) a synthetic sequence and its H.264 video. */
-export function makeSequence(hawor, preset, seed, frames, size, dir) {
+/**
+ * Makes (or reuses) a synthetic sequence and its H.264 video. options.capture: a `hawor synth
+ * --capture` profile (with options.captureArgs, more `--exposure`-style overrides); the video is
+ * then encoded as the profile's capture.json says (its ffmpeg_args), else losslessly enough (CRF 12).
+ * Returns the intrinsics of intrinsics.txt's first line (of the rendered W × H), its lens ('pinhole'
+ * without a lens line) and the video's size (smaller when the profile's encoding downscales:
+ * scale the intrinsics by videoWidth / W).
+ */
+export function makeSequence(hawor, preset, seed, frames, size, dir, options = {}) {
   if (!existsSync(join(dir, 'video.mp4'))) {
     const glb = join(repo, 'node_modules', '@webxr-input-profiles', 'assets', 'dist', 'profiles', 'generic-hand');
     const env = { ...process.env };
     if (!env.HAWOR_HAND_DIR && !existsSync(join(dirname(hawor), '..', 'models', 'hand_right.npz'))) env.HAWOR_HAND_DIR = glb;
-    execFileSync(hawor, ['synth', '--preset', preset, '--seed', String(seed), '--frames', String(frames), '--size', size, '--out', dir], { env, stdio: ['ignore', 'ignore', 'inherit'] });
-    execFileSync('ffmpeg', ['-v', 'error', '-y', '-framerate', '30', '-i', join(dir, 'rgb', '%06d.png'), '-c:v', 'libx264', '-crf', '12',
-      '-pix_fmt', 'yuv420p', join(dir, 'video.mp4')]);
+    const capture = options.capture ? ['--capture', options.capture, ...(options.captureArgs ?? [])] : [];
+    execFileSync(hawor, ['synth', '--preset', preset, '--seed', String(seed), '--frames', String(frames), '--size', size, ...capture, '--out', dir], { env, stdio: ['ignore', 'ignore', 'inherit'] });
+    const cj = join(dir, 'capture.json');
+    const enc = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).encode : null;
+    const codec = enc && enc.ffmpeg_args ? enc.ffmpeg_args : ['-c:v', 'libx264', '-crf', '12', '-pix_fmt', 'yuv420p'];
+    execFileSync('ffmpeg', ['-v', 'error', '-y', '-framerate', '30', '-i', join(dir, 'rgb', '%06d.png'), ...codec, join(dir, 'video.mp4')]);
   }
-  const [fx, fy, cx, cy, W, H, fps] = readFileSync(join(dir, 'intrinsics.txt'), 'utf8').trim().split(/\s+/).map(Number);
-  return { dir, fx, fy, cx, cy, W, H, fps };
+  const lines = readFileSync(join(dir, 'intrinsics.txt'), 'utf8').trim().split('\n');
+  const [fx, fy, cx, cy, W, H, fps] = lines[0].trim().split(/\s+/).map(Number);
+  const lensLine = lines.slice(1).find((l) => l.startsWith('lens '));
+  const cj = join(dir, 'capture.json');
+  const enc = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).encode : null;
+  const videoWidth = enc && enc.width ? enc.width : W, videoHeight = enc && enc.height ? enc.height : H;
+  return { dir, fx, fy, cx, cy, W, H, fps, lens: lensLine ? lensLine.slice(5).trim() : 'pinhole', videoWidth, videoHeight };
 }
 
 /** Simulated perception: GT keypoints projected + noise (options.observations). */

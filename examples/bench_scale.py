@@ -132,7 +132,10 @@ def main(argv):
             entry["skipped"] = "SLAM failed (ATE %.1f %% of the path): no single trajectory scale" % (100 * ate["mean"] / path)
             print("%-13s %7.2f %8.4f | %s" % (preset, path, ate["mean"], entry["skipped"]))
             continue
-        intr = open(os.path.join(seq, "intrinsics.txt")).read().split()
+        lens = bc.read_intrinsics(os.path.join(seq, "intrinsics.txt"))[7]
+        if lens != "pinhole":
+            raise RuntimeError("%s: lens %s, but hawor scale takes pinhole intrinsics" % (seq, lens))
+        intr = open(os.path.join(seq, "intrinsics.txt")).readline().split()
         fps = float(intr[6])
         kflag = ["--intrinsics", ",".join(intr[:4])]
         outp = os.path.join(seq, "metric_ground.tum")

@@ -34,11 +34,20 @@ def run(cmd):
     return p.stdout, time.time() - t
 
 
+def pinhole_intrinsics(seq):
+    """The first line of intrinsics.txt as strings (fx fy cx cy width height fps); the sequence
+    must have no lens ('lens' line other than pinhole): hawor slam and scale take pinhole
+    intrinsics."""
+    fx, fy, cx, cy, w, h, fps, lens = bc.read_intrinsics(os.path.join(seq, "intrinsics.txt"))
+    if lens != "pinhole":
+        raise RuntimeError("%s: lens %s, but hawor slam takes pinhole intrinsics (synthesise without a lens)" % (seq, lens))
+    return open(os.path.join(seq, "intrinsics.txt")).readline().split()
+
+
 def hand_coverage(seq):
     """Per-frame fraction of the image covered by hand pixels, from hands_gt.npz."""
     z = np.load(os.path.join(seq, "hands_gt.npz"))
-    k = open(os.path.join(seq, "intrinsics.txt")).read().split()
-    w, h = float(k[4]), float(k[5])
+    w, h = bc.read_intrinsics(os.path.join(seq, "intrinsics.txt"))[4:6]
     return (z["left_visible_pixels"].astype(np.float64) + z["right_visible_pixels"]) / (w * h)
 
 
@@ -81,7 +90,7 @@ def main(argv):
             run(cmd)
         _, gt, _ = bc.read_tum(os.path.join(seq, "camera_gt.tum"))
         path = bc.path_length(gt)
-        k = open(os.path.join(seq, "intrinsics.txt")).read().split()
+        k = pinhole_intrinsics(seq)
         cov = hand_coverage(seq)
         entry = {"preset": preset, "frames": int(gt.shape[0]), "path_m": path,
                  "hand_cover30_fraction": float((cov >= 0.3).mean()), "max_hand_cover": float(cov.max())}

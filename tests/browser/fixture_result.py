@@ -21,7 +21,12 @@ def main():
         return 2
     src, out = args[0], args[1]
     every = int(args[args.index('--infill-every') + 1]) if '--infill-every' in args else 0
-    fx, fy, cx, cy, w, h, fps = open(f'{src}/intrinsics.txt').read().split()[:7]
+    intr = open(f'{src}/intrinsics.txt').read().splitlines()
+    fx, fy, cx, cy, w, h, fps = intr[0].split()
+    lens = [l.split() for l in intr[1:] if l.startswith('lens ')]
+    if lens and lens[0][1] != 'pinhole':  # hawor synth --capture with a lens: the projections below are pinhole
+        print(f'fixture_result: {src} has lens {lens[0][1]}; the fixture needs a pinhole sequence', file=sys.stderr)
+        return 2
     fx, fy, cx, cy, fps = float(fx), float(fy), float(cx), float(cy), float(fps)
     w, h = int(w), int(h)
     tum = np.array([[float(x) for x in l.split()] for l in open(f'{src}/camera_gt.tum') if l.strip() and not l.startswith('#')])
