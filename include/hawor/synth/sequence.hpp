@@ -522,7 +522,8 @@ class SynthSequence {
     }
   }
   // Image motion (pixels) of frame i between τ = −h and +h: the camera's rotation × f, its
-  // translation × f / 0.5 m, and the hands' keypoints in front of the camera as projected.
+  // translation × f / 1 m (the room's nearer surfaces), and the hands' keypoints as projected
+  // (those at least 10 cm in front of the camera and in the image at one end or the other).
   double imageMotion(int i, double h) {
     RigidPose<Scalar> a, b;
     std::vector<HandMeshView<Scalar>> unused;
@@ -539,13 +540,14 @@ class SynthSequence {
       }
     }
     const double angle = static_cast<double>(matrixToAxisAngle(Mat3<Scalar>(a.R.transpose() * b.R)).norm());
-    double motion = f * (angle + static_cast<double>((a.t - b.t).norm()) / 0.5);
+    double motion = f * (angle + static_cast<double>((a.t - b.t).norm()));
     for (int s = 0; s < 2; ++s) {
       for (Eigen::Index k = 0; k < ka[s].rows(); ++k) {
         const Vec3<Scalar> p = ka[s].row(k).transpose(), q = kb[s].row(k).transpose();
-        if (!(p.z() > Scalar(0.05) && q.z() > Scalar(0.05))) continue;
-        const Vec2<Scalar> d = camera_.project(p) - camera_.project(q);
-        motion = std::max(motion, static_cast<double>(d.norm()));
+        if (!(p.z() > Scalar(0.1) && q.z() > Scalar(0.1))) continue;
+        const Vec2<Scalar> u = camera_.project(p), v = camera_.project(q);
+        if (!camera_.inImage(u) && !camera_.inImage(v)) continue;
+        motion = std::max(motion, static_cast<double>((u - v).norm()));
       }
     }
     return motion;
