@@ -13,11 +13,12 @@
 //             for any direction, z ≤ 0 included, up to the model's valid angle.
 // These are OpenCV's projectPoints and fisheye::projectPoints with rvec = tvec = 0.
 //
-// Unprojection inverts the radial function by Newton's method (bracketed, with bisection as the
-// fallback) and is defined only where the map does not fold: up to maxMonotonicAngle(), the
-// first angle at which the radial function stops increasing. Calibrated polynomials are only
-// meaningful inside the calibrated field of view, and many fold just outside it; validate()
-// checks that the field an image needs lies before the fold.
+// Unprojection inverts the map by Newton's method and is defined only where the map does not
+// fold: up to maxMonotonicAngle(), the first angle at which the radial function stops
+// increasing (fisheye: Newton on θd(θ) from θ = θd, falling back to a bracketed solve on
+// [0, fold]; radial-tangential: damped 2D Newton from m, then from 0 inside the fold radius).
+// Calibrated polynomials are only meaningful inside the calibrated field of view, and many fold
+// just outside it; validate() checks that the field an image needs lies before the fold.
 //
 // A plain aggregate (Lens<double>{LensKind::Fisheye, {k1, k2, k3, k4, 0}}); thread-safe to read;
 // nothing allocates except toString/parse.
@@ -54,8 +55,8 @@ constexpr int kLensMaxDegree = 8;
 /// The sign changes of p (degree n ≤ 8) inside the open interval (lo, hi), sorted, written to
 /// `roots`; returns how many. Exact up to rounding: p is monotonic between consecutive roots of
 /// p′ (found recursively), so each monotonic piece holds at most one sign change, found by
-/// bisection. Roots where p only touches zero (even multiplicity) are reported only when p is
-/// exactly 0 at a critical point; they are not sign changes.
+/// Newton's method kept inside the piece. Roots where p only touches zero (even multiplicity)
+/// are reported only when p is exactly 0 at a critical point; they are not sign changes.
 template <typename Scalar>
 int lensPolyRoots(const Scalar* c_in, int n, Scalar lo, Scalar hi, Scalar* roots) {
   while (n > 0 && c_in[n] == Scalar(0)) --n;
@@ -80,20 +81,48 @@ int lensPolyRoots(const Scalar* c_in, int n, Scalar lo, Scalar hi, Scalar* roots
     if (j < m && fb == Scalar(0)) {
       roots[count++] = b;  // touches or crosses exactly at a critical point
     } else if ((fa < Scalar(0) && fb > Scalar(0)) || (fa > Scalar(0) && fb < Scalar(0))) {
-      Scalar x0 = a, x1 = b;
+      // Newton's method kept inside the bracket [x0, x1] (p′ has one sign there), bisection
+      // when a step would leave it.
+      Scalar x0 = a, x1 = b, x = Scalar(0.5) * (a + b);
       const bool rising = fa < Scalar(0);
+      const Scalar eps = std::numeric_limits<Scalar>::epsilon();
       for (int it = 0; it < 200; ++it) {
-        const Scalar mid = Scalar(0.5) * (x0 + x1);
-        if (!(mid > x0 && mid < x1)) break;
-        const Scalar fm = lensPolyEval(c_in, n, mid);
-        ((fm < Scalar(0)) == rising ? x0 : x1) = mid;
+        const Scalar fx = lensPolyEval(c_in, n, x);
+        if (fx == Scalar(0)) break;
+        ((fx < Scalar(0)) == rising ? x0 : x1) = x;
+        const Scalar step = fx / lensPolyEval(d, n - 1, x);
+        if (std::abs(step) <= Scalar(2) * eps * std::abs(x)) {
+          x -= step;  // converged
+          break;
+        }
+        x = x - step;
+        if (!(x > x0 && x < x1)) x = Scalar(0.5) * (x0 + x1);
+        if (!(x > x0 && x < x1)) break;  // the bracket is down to adjacent numbers
       }
-      roots[count++] = Scalar(0.5) * (x0 + x1);
+      roots[count++] = x;
     }
     a = b;
     fa = fb;
   }
   return count;
+}
+
+/// Cheap proof that p(x) > 0 on [0, hi] (hi ≥ 0): on each of `pieces` equal parts [a, b],
+/// p(x) ≥ Σ_{c_i > 0} c_i a^i + Σ_{c_i < 0} c_i b^i (each term is monotonic for x ≥ 0). False
+/// means "not proved" (p may still be positive).
+template <typename Scalar>
+bool lensPolyBoundPositive(const Scalar* c, int n, Scalar hi, int pieces) {
+  for (int j = 0; j < pieces; ++j) {
+    const Scalar a = hi * Scalar(j) / Scalar(pieces), b = hi * Scalar(j + 1) / Scalar(pieces);
+    Scalar bound = c[0], ap = Scalar(1), bp = Scalar(1);
+    for (int i = 1; i <= n; ++i) {
+      ap *= a;
+      bp *= b;
+      bound += c[i] * (c[i] > Scalar(0) ? ap : bp);
+    }
+    if (!(bound > Scalar(0))) return false;
+  }
+  return true;
 }
 
 /// The smallest x in (lo, hi] with p(x) ≤ 0, for p(lo) > 0; +∞ when p stays positive.
@@ -125,7 +154,7 @@ std::string lensShortest(Scalar v) {
   char buf[64];
   for (int prec = 1; prec <= std::numeric_limits<Scalar>::max_digits10; ++prec) {
     std::snprintf(buf, sizeof(buf), "%.*g", prec, static_cast<double>(v));
-    Scalar back;
+    Scalar back = Scalar(0);
     if (lensParseNumber<Scalar>(buf, back) && back == v) break;
   }
   return buf;
@@ -556,29 +585,29 @@ struct Lens {
     radTanSlope(c);
     return detail::lensFirstNonPositive(c, 6, Scalar(0), hi);
   }
+  // Monotonic out to radius r / angle θ: the cheap bound on the whole range, then on 4 and 16
+  // pieces (each a proof), and only then the exact first root.
   bool radTanMonotonicUpToRadius(Scalar r) const {
     if (!(r >= Scalar(0)) || !std::isfinite(r)) return false;
     Scalar c[7];
     radTanSlope(c);
-    // Lower bound of the slope on [0, r]: 1 plus every negative term at r.
-    Scalar bound = Scalar(1), rp = Scalar(1);
-    for (int i = 1; i < 7; ++i) {
-      rp *= r;
-      bound += std::min(c[i], Scalar(0)) * rp;
-    }
-    if (bound > Scalar(0)) return true;
-    return !(radTanFoldRadius(r) <= r);
+    for (int pieces : {1, 4, 16})
+      if (detail::lensPolyBoundPositive(c, 6, r, pieces)) return true;
+    return !(detail::lensFirstNonPositive(c, 6, Scalar(0), r) <= r);
+  }
+  // The bounds alone for the fisheye's slope θd′ (a polynomial in u = θ²) on [0, θ].
+  bool fisheyeBoundPositive(Scalar theta) const {
+    const Scalar c[5] = {Scalar(1), 3 * k[0], 5 * k[1], 7 * k[2], 9 * k[3]};
+    const Scalar u = theta * theta;
+    for (int pieces : {1, 4, 16})
+      if (detail::lensPolyBoundPositive(c, 4, u, pieces)) return true;
+    return false;
   }
   bool fisheyeMonotonicUpTo(Scalar theta) const {
     if (!(theta >= Scalar(0)) || !(theta <= Constants<Scalar>::pi())) return false;
+    if (fisheyeBoundPositive(theta)) return true;
     const Scalar c[5] = {Scalar(1), 3 * k[0], 5 * k[1], 7 * k[2], 9 * k[3]};
     const Scalar u = theta * theta;
-    Scalar bound = Scalar(1), up = Scalar(1);
-    for (int i = 1; i < 5; ++i) {
-      up *= u;
-      bound += std::min(c[i], Scalar(0)) * up;
-    }
-    if (bound > Scalar(0)) return true;
     return !(detail::lensFirstNonPositive(c, 4, Scalar(0), u) <= u);
   }
 
@@ -592,12 +621,15 @@ struct Lens {
       const Scalar f = thetaD(t) - td;
       if (f == Scalar(0)) break;
       (f < Scalar(0) ? lo : hi) = t;
-      const Scalar d = thetaDPrime(t);
-      Scalar next = t - f / d;
+      const Scalar d = thetaDPrime(t), step = f / d;
+      if (d > Scalar(0) && abs(step) <= Scalar(2) * eps * t) {
+        t -= step;  // converged (tested before the bracket: a sub-ulp step may land on lo/hi)
+        break;
+      }
+      Scalar next = t - step;
       if (!(d > Scalar(0)) || !(next > lo && next < hi)) next = Scalar(0.5) * (lo + hi);
-      const bool done = abs(next - t) <= Scalar(2) * eps * next || hi - lo <= Scalar(2) * eps * hi;
       t = next;
-      if (done) break;
+      if (hi - lo <= Scalar(2) * eps * hi) break;
     }
     if (!std::isfinite(t)) return false;
     theta = t;
@@ -611,43 +643,78 @@ struct Lens {
       theta = Scalar(0);
       return true;
     }
-    const Scalar pi = Constants<Scalar>::pi();
-    // Usual case: a root in [0, π] that the cheap bound shows to lie before any fold.
-    if (thetaD(pi) >= td) {
-      Scalar t;
-      if (solveThetaIn(td, pi, t) && fisheyeMonotonicUpTo(t)) {
-        theta = t;
-        return true;
+    using std::abs;
+    const Scalar pi = Constants<Scalar>::pi(), eps = std::numeric_limits<Scalar>::epsilon();
+    // Usual case: plain Newton from θ = θd converges to a root θ*, and the cheap bound shows
+    // θd increasing on [0, θ*]: then θ* is the only root there, on the monotonic branch.
+    Scalar t = std::min(td, pi);
+    for (int it = 0; it < 30; ++it) {
+      const Scalar d = thetaDPrime(t);
+      if (!(d > Scalar(0))) break;
+      const Scalar step = (thetaD(t) - td) / d;
+      t -= step;
+      if (!(t > Scalar(0) && t <= pi)) break;
+      if (abs(step) <= Scalar(2) * eps * t) {
+        if (abs(thetaD(t) - td) <= Scalar(64) * eps * td && fisheyeBoundPositive(t)) {
+          theta = t;
+          return true;
+        }
+        break;
       }
     }
-    // Otherwise bracket on the monotonic part only.
+    // Otherwise: bracketed Newton on the monotonic part only.
     const Scalar tmax = maxMonotonicAngle();
     if (!(thetaD(tmax) >= td)) return false;
     return solveThetaIn(td, tmax, theta);
   }
 
-  // Newton on the 2D map (x, y) ↦ distort(x, y) = m, from (x, y) = m, with step halving when a
-  // step does not reduce the residual; the solution must lie where the map does not fold.
+  // Newton on the 2D map (x, y) ↦ distort(x, y) = m, with step halving when a step does not
+  // reduce the residual or reaches a point where the map folds (det J ≤ 0). It starts from
+  // (x, y) = m; when that fails, again from (0, 0) with every iterate kept inside the fold
+  // radius: a strong pincushion lens maps the domain's edge beyond its own fold radius, where
+  // m is no starting point and the polynomial may rise again to a second, folded solution.
+  // The solution must lie where the map does not fold.
   bool undistortRadTan(const Vec2<Scalar>& m, Vec2<Scalar>& out) const {
-    using std::abs;
+    Vec2<Scalar> xy;
+    if (!newtonRadTan(m, m, std::numeric_limits<Scalar>::infinity(), xy) &&
+        !newtonRadTan(m, Vec2<Scalar>::Zero(), radTanFoldRadius(Scalar(1000)), xy)) {
+      return false;
+    }
+    out = xy;
+    return true;
+  }
+  bool newtonRadTan(const Vec2<Scalar>& m, const Vec2<Scalar>& start, Scalar rlimit,
+                    Vec2<Scalar>& out) const {
+    using std::sqrt;
     const Scalar eps = std::numeric_limits<Scalar>::epsilon();
     // Relative tolerances: the residual's rounding floor is a few ε·|m|.
     const Scalar scale = m.norm() + std::numeric_limits<Scalar>::min();
     const Scalar tight = Scalar(4) * eps * scale, loose = Scalar(64) * eps * scale;
-    Vec2<Scalar> xy = m;
+    auto det2 = [](const Eigen::Matrix<Scalar, 2, 2>& A) {
+      return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+    };
+    Vec2<Scalar> xy = start;
     Eigen::Matrix<Scalar, 2, 2> J;
     Vec2<Scalar> e = distortRadTan(xy, &J) - m;
     Scalar en = e.norm();
     bool ok = false;
-    for (int it = 0; it < 50 && !ok; ++it) {
+    int stalled = 0;  // damped steps in a row that gained < 1% (no solution nearby)
+    for (int it = 0; it < 50 && stalled < 4; ++it) {
       if (en <= tight) {
         ok = true;
         break;
       }
-      const Scalar det = J(0, 0) * J(1, 1) - J(0, 1) * J(1, 0);
+      const Scalar det = det2(J);
       if (!(det > Scalar(0)) || !std::isfinite(det)) break;
       const Vec2<Scalar> step((J(1, 1) * e(0) - J(0, 1) * e(1)) / det,
                               (J(0, 0) * e(1) - J(1, 0) * e(0)) / det);
+      if (step.norm() <= sqrt(eps) * (xy.norm() + std::numeric_limits<Scalar>::min())) {
+        // Quadratic convergence: after a step this small the error is ~ε·|xy|.
+        xy -= step;
+        e = distortRadTan(xy, nullptr) - m;
+        en = e.norm();
+        break;
+      }
       Scalar alpha = Scalar(1);
       bool improved = false;
       for (int ls = 0; ls < 20; ++ls, alpha *= Scalar(0.5)) {
@@ -655,7 +722,8 @@ struct Lens {
         Eigen::Matrix<Scalar, 2, 2> Jc;
         const Vec2<Scalar> ec = distortRadTan(cand, &Jc) - m;
         const Scalar ecn = ec.norm();
-        if (ecn < en) {
+        if (ecn < en && det2(Jc) > Scalar(0) && cand.norm() < rlimit) {
+          stalled = alpha < Scalar(1) && ecn > Scalar(0.99) * en ? stalled + 1 : 0;
           xy = cand;
           J = Jc;
           e = ec;
