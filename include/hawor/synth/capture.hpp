@@ -15,9 +15,10 @@
 // gets the mean over its window:
 //   I_r = Σ_s w_s(r) I_s,r,   w_s(r) = (1/E) ∫ h_s(t) dt over row r's window   (E = 0: h_s(t_i + δ_r))
 // so the weights change smoothly from row to row (no bands) and E = R = 0 gives the reference
-// image. S is adaptive by default: the image motion over the frame's window (camera rotation ×
-// focal, camera translation × focal / 0.5 m, the hands' keypoints as projected) divided by
-// subframeStepPx, rounded up to odd, at most maxSubframes; a still frame renders once.
+// image. S is adaptive by default: the image motion over the frame's window (the larger of the
+// scene's, the 95th percentile over the points of a small depth render moved with the camera,
+// and the hands', their keypoints in the image; sequence.hpp) divided by subframeStepPx, plus 1,
+// rounded up to odd, at most maxSubframes; a frame moving less than a step renders once.
 // Sub-frames render only the rows (bands) whose weights need them.
 //
 // Light and sensor. With L the rendered colour (grey levels, render()'s values before noise),
@@ -282,7 +283,7 @@ struct CaptureOptions {
     checkRange("readout", readout, 0, 1, " s");
     checkRange("subframes", subframes, 0, 255);
     checkRange("max-subframes", maxSubframes, 1, 255);
-    checkRange("subframe step", subframeStepPx, 0.25, 1000, " px");
+    checkRange("subframe-step", subframeStepPx, 0.25, 1000, " px");
     checkRange("illumination", illumination, 1e-3, 100);
     checkRange("gain", gain, 1e-3, 100);
     if (readNoise >= 0 || !std::isfinite(readNoise)) checkRange("read-noise", readNoise, 0, 100);
@@ -435,7 +436,8 @@ inline const std::vector<CaptureField>& captureFields() {
       {"exposure", "S", "exposure time of each row, seconds (0: instant)"},
       {"readout", "S", "rolling-shutter readout, first row to last, seconds (0: global shutter)"},
       {"subframes", "N", "sub-frames per frame (0: adaptive, from the image motion)"},
-      {"max-subframes", "N", "adaptive sub-frames at most"},
+      {"max-subframes", "N", "adaptive sub-frames at most (25)"},
+      {"subframe-step", "PX", "adaptive: image motion between sub-frames, pixels (2; larger renders faster)"},
       {"illumination", "X", "scene light relative to the modelled room (low light < 1)"},
       {"gain", "G", "exposure gain when auto-exposure is off"},
       {"read-noise", "SIGMA", "read noise, grey levels (default: --noise, else the preset's)"},
@@ -468,6 +470,8 @@ inline void setCaptureField(CaptureOptions& o, const std::string& name, const st
     o.subframes = whole(number(name, value));
   } else if (name == "max-subframes") {
     o.maxSubframes = whole(number(name, value));
+  } else if (name == "subframe-step") {
+    o.subframeStepPx = number(name, value);
   } else if (name == "illumination") {
     o.illumination = number(name, value);
   } else if (name == "gain") {
@@ -722,8 +726,9 @@ struct LensViews {
         Eigen::Matrix2d J;
         J.col(0) = raw(f, bearing[p + 1]) - a;
         J.col(1) = raw(f, bearing[p + W]) - a;
-        const Eigen::JacobiSVD<Eigen::Matrix2d> svd(J);
-        const double smin = svd.singularValues()(1);
+        // σ_min² = (‖J‖² − √(‖J‖⁴ − 4 det²))/2.
+        const double n2 = J.squaredNorm(), det = J.determinant();
+        const double smin = std::sqrt(std::max(0.0, 0.5 * (n2 - std::sqrt(std::max(0.0, n2 * n2 - 4 * det * det)))));
         if (smin > 1e-9) rho = std::max(rho, 1 / smin);
       }
     }

@@ -29,7 +29,8 @@
 // path (CameraPath::at) and the hands from their per-frame parameters, interpolated
 // (interpolateHandPose: SLERP of the rotations, LERP of the translation). kp_in_image projects
 // through the lens. Auto-exposure meters every frame up to the one rendered (a 64-pixel-wide
-// render, cached), so frames may still be rendered in any order.
+// render, cached), so frames may still be rendered in any order; the same small render gives
+// the scene's image motion for the adaptive sub-frame count.
 // Determinism: every random number comes from SynthRng streams of the seed (random.hpp), so a
 // seed gives the same sequence on every run and platform.
 // Thread-safety: renderFrame() uses the sequence's scratch buffers: one thread per sequence;
@@ -37,6 +38,7 @@
 // shared, read-only, through sharedScene()).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -310,21 +312,10 @@ class SynthSequence {
   double meter(int i) {
     const std::size_t fi = checkFrame(i);
     if (meter_.size() <= fi) meter_.resize(fi + 1, -1.0);
-    if (meter_[fi] >= 0) return meter_[fi];
-    if (!meterRenderer_) {
-      const int mw = 64, mh = std::max(16, static_cast<int>(std::lround(64.0 * opt_.height / opt_.width)));
-      meterRenderer_ = std::make_unique<SceneRenderer<Scalar>>(
-          *scene_, PinholeCamera<Scalar>::fromFov(mw, mh, Scalar(std::min(fovDeg_, 120.0))));
+    if (meter_[fi] < 0) {
+      renderSmall(i);
+      meter_[fi] = meteredGrey(meterRgb_);
     }
-    const RigidPose<Scalar> cw = worldFromCamera(i).inverse();
-    std::vector<HandMeshView<Scalar>> views;
-    for (int s = 0; s < 2; ++s) {
-      forward(*models_[static_cast<std::size_t>(s)], poses_[static_cast<std::size_t>(s)][fi], ws_, fwd_);
-      toCamera(fwd_.vertices, cw, subVerts_[static_cast<std::size_t>(s)]);
-      views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
-    }
-    meterRenderer_->renderLinear(roomFromCamera_[fi], views, meterRgb_, meterGeo_);
-    meter_[fi] = meteredGrey(meterRgb_);
     return meter_[fi];
   }
 
@@ -521,13 +512,32 @@ class SynthSequence {
       views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
     }
   }
-  // Image motion (pixels) of frame i between τ = −h and +h: the camera's rotation × f, its
-  // translation × f / 1 m (the room's nearer surfaces), and the hands' keypoints as projected
-  // (those at least 10 cm in front of the camera and in the image at one end or the other).
+  // The small render of frame i's reference state (64 pixels wide, pinhole, the field of view
+  // up to 120°) into meterRgb_ / meterGeo_: the auto-exposure's metering and the scene's motion.
+  void renderSmall(int i) {
+    const std::size_t fi = static_cast<std::size_t>(i);
+    if (!meterRenderer_) {
+      const int mw = 64, mh = std::max(16, static_cast<int>(std::lround(64.0 * opt_.height / opt_.width)));
+      meterRenderer_ = std::make_unique<SceneRenderer<Scalar>>(
+          *scene_, PinholeCamera<Scalar>::fromFov(mw, mh, Scalar(std::min(fovDeg_, 120.0))));
+    }
+    const RigidPose<Scalar> cw = worldFromCamera(i).inverse();
+    std::vector<HandMeshView<Scalar>> views;
+    for (int s = 0; s < 2; ++s) {
+      forward(*models_[static_cast<std::size_t>(s)], poses_[static_cast<std::size_t>(s)][fi], ws_, fwd_);
+      toCamera(fwd_.vertices, cw, subVerts_[static_cast<std::size_t>(s)]);
+      views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
+    }
+    meterRenderer_->renderLinear(roomFromCamera_[fi], views, meterRgb_, meterGeo_);
+  }
+
+  // Image motion (pixels) of frame i between τ = −h and +h (capture.hpp: adaptive sub-frames):
+  // the larger of the scene's and the hands'. Scene: the points of the small render's depth
+  // map (hands left out), moved with the camera from its pose at −h to +h and projected with
+  // the intrinsics: the 95th percentile of their displacement. Hands: their keypoints at least
+  // 10 cm in front of the camera and in the image at one end or the other, the largest.
   double imageMotion(int i, double h) {
     RigidPose<Scalar> a, b;
-    std::vector<HandMeshView<Scalar>> unused;
-    const double f = static_cast<double>(std::max(camera_.fx, camera_.fy));
     Points3<Scalar> ka[2], kb[2];
     for (int e = 0; e < 2; ++e) {
       const double tau = e == 0 ? -h : h;
@@ -539,8 +549,7 @@ class SynthSequence {
         toCamera(fwd_.keypoints, cw, e == 0 ? ka[s] : kb[s]);
       }
     }
-    const double angle = static_cast<double>(matrixToAxisAngle(Mat3<Scalar>(a.R.transpose() * b.R)).norm());
-    double motion = f * (angle + static_cast<double>((a.t - b.t).norm()));
+    double motion = 0;
     for (int s = 0; s < 2; ++s) {
       for (Eigen::Index k = 0; k < ka[s].rows(); ++k) {
         const Vec3<Scalar> p = ka[s].row(k).transpose(), q = kb[s].row(k).transpose();
@@ -549,6 +558,26 @@ class SynthSequence {
         if (!camera_.inImage(u) && !camera_.inImage(v)) continue;
         motion = std::max(motion, static_cast<double>((u - v).norm()));
       }
+    }
+    renderSmall(i);
+    const PinholeCamera<Scalar>& m = meterRenderer_->camera();
+    const RigidPose<Scalar>& c0 = roomFromCamera_[static_cast<std::size_t>(i)];
+    const RigidPose<Scalar> ai = a.inverse(), bi = b.inverse();
+    flow_.clear();
+    for (int y = 0; y < m.height; ++y) {
+      for (int x = 0; x < m.width; ++x) {
+        const float z = meterGeo_.depth.at(x, y);
+        if (!std::isfinite(z) || meterGeo_.mask.at(x, y) != 0) continue;
+        const Vec3<Scalar> P = c0 * Vec3<Scalar>(m.ray(Vec2<Scalar>(Scalar(x), Scalar(y))) * Scalar(z));
+        const Vec3<Scalar> p = ai * P, q = bi * P;
+        if (!(p.z() > Scalar(0.05) && q.z() > Scalar(0.05))) continue;
+        flow_.push_back(static_cast<double>((camera_.project(p) - camera_.project(q)).norm()));
+      }
+    }
+    if (!flow_.empty()) {
+      const std::size_t k = flow_.size() * 95 / 100;
+      std::nth_element(flow_.begin(), flow_.begin() + static_cast<std::ptrdiff_t>(k), flow_.end());
+      motion = std::max(motion, flow_[k]);
     }
     return motion;
   }
@@ -581,7 +610,7 @@ class SynthSequence {
   std::unique_ptr<SceneRenderer<Scalar>> meterRenderer_;
   ImageF meterRgb_;
   RenderedImages meterGeo_;
-  std::vector<double> meter_, aeLog_;
+  std::vector<double> meter_, aeLog_, flow_;
   SmoothSignal<Scalar> aeDrift_, wbDrift_;
 };
 
