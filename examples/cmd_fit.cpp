@@ -1,5 +1,7 @@
 // hawor fit — per-frame fit of a hand model to keypoint observations (hand/fit.hpp), over a
-// sequence, each frame warm-started from the previous one.
+// sequence, each frame warm-started from the previous one. With a lens (--camera) the 2D
+// keypoints are undistorted first (CameraModel::undistortPixel) and the pinhole fit runs in the
+// pinhole camera with the same intrinsics: the same rays, so the fitted hand is exact.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include "cli_args.hpp"
 #include "cli_hand.hpp"
 #include "commands.hpp"
+#include "hawor/geometry/camera_model.hpp"
 #include "hawor/hand/fit.hpp"
 #include "hawor/hand/load_model.hpp"
 #include "hawor/io/npz.hpp"
@@ -20,7 +23,7 @@ namespace {
 
 const char* kFitHelpHead =
     "usage: hawor fit --model FILE|default [--side left|right] --obs KEYPOINTS.npz\n"
-    "                 --intrinsics fx,fy,cx,cy --out FIT.npz [--cold]\n"
+    "                 --intrinsics fx,fy,cx,cy [--camera LENS] --out FIT.npz [--cold]\n"
     "\n"
     "Fits the hand model's pose, shape, global rotation and metric camera-frame translation to\n"
     "each frame's keypoints (Levenberg-Marquardt, robust 2D term, centred 3D term, joint limits;\n"
@@ -38,7 +41,13 @@ const char* kFitHelpTail =
     "                                        optional (e.g. MediaPipe's world landmarks)\n"
     "                          confidence3d  (T,K) in [0,1], optional\n"
     "                          valid         (T,) 0/1, optional: frames with 0 are skipped\n"
-    "  --intrinsics fx,fy,cx,cy  pinhole intrinsics in pixels\n"
+    "  --intrinsics fx,fy,cx,cy  intrinsics in pixels\n"
+    "  --camera LENS         the lens: pinhole (default), opencv:k1,k2,p1,p2[,k3] or\n"
+    "                        fisheye:k1,k2,k3,k4; the keypoints (raw image pixels) are\n"
+    "                        undistorted to the pinhole camera with the same intrinsics, where\n"
+    "                        the fit runs (reproj_rms_px is in its pixels); a keypoint the lens\n"
+    "                        cannot undistort (beyond its fold, or 90 degrees or more off the\n"
+    "                        axis) is left out, as with confidence 0\n"
     "  --cold                start every frame cold (no warm start)\n"
     "  --out FIT.npz         the result, float64 unless noted, NaN at frames not fitted:\n"
     "                          rot (T,3) axis-angle, hand_pose (T,(J-1)*3), betas (T,B),\n"
@@ -47,8 +56,9 @@ const char* kFitHelpTail =
     "                          keypoints in metres, valid (T,) uint8, reproj_rms_px (T,),\n"
     "                          iterations (T,) int32\n"
     "\n"
-    "Prints one JSON object: model, kind, side, frames, fitted, skipped (valid = 0), failed\n"
-    "(the fit threw: see stderr), median_reproj_rms_px and median_ms_per_frame over fitted frames.\n";
+    "Prints one JSON object: model, kind, side, camera, frames, fitted, skipped (valid = 0),\n"
+    "failed (the fit threw: see stderr), keypoints_outside_lens, median_reproj_rms_px and\n"
+    "median_ms_per_frame over fitted frames.\n";
 
 /// An optional (T,K,...) float array of the observations, checked against its shape.
 std::vector<double> readObsArray(const hawor::Npz& z, const std::string& key, const std::vector<size_t>& shape) {
@@ -76,7 +86,7 @@ void checkConfidence(const hawor::Npz& z, const std::string& key, const std::vec
 }  // namespace
 
 int cmdFit(int argc, char** argv) {
-  Args args(argc, argv, 2, {"model", "side", "obs", "intrinsics", "out"}, {"cold"});
+  Args args(argc, argv, 2, {"model", "side", "obs", "intrinsics", "camera", "out"}, {"cold"});
   if (args.help()) {
     std::printf("%s%s%s", kFitHelpHead, kModelOptionHelp, kFitHelpTail);
     return 0;
@@ -86,6 +96,13 @@ int cmdFit(int argc, char** argv) {
   const std::string obsPath = args.required("obs"), out = args.required("out");
   const std::vector<double> K4 = args.numbers("intrinsics", 4);
   if (!(K4[0] > 0) || !(K4[1] > 0)) throw UsageError("--intrinsics: fx and fy must be > 0");
+  hawor::Lens<double> lens;
+  try {
+    lens = hawor::Lens<double>::parse(args.get("camera", "pinhole"));
+    lens.validate(0.0);  // the coefficients alone: the keypoints are checked one by one
+  } catch (const hawor::Error& e) {
+    throw UsageError(std::string("--camera: ") + (e.what() + 7));  // without "hawor: "
+  }
   hawor::PinholeCamera<double> cam;
   cam.fx = K4[0];
   cam.fy = K4[1];
@@ -112,7 +129,7 @@ int cmdFit(int argc, char** argv) {
   }
   const size_t T = s2[0];
   std::vector<double> kp2 = z.getAs<double>("keypoints2d");
-  const std::vector<double> c2 = readObsArray(z, "confidence2d", {T, K});
+  std::vector<double> c2 = readObsArray(z, "confidence2d", {T, K});
   std::vector<double> kp3 = readObsArray(z, "keypoints3d", {T, K, 3});
   const std::vector<double> c3 = readObsArray(z, "confidence3d", {T, K});
   if (!c3.empty() && kp3.empty()) throw hawor::Error(z.source() + ": 'confidence3d' is given without 'keypoints3d'");
@@ -134,6 +151,27 @@ int cmdFit(int argc, char** argv) {
   };
   checkFinite(kp2, c2, "keypoints2d", 2);
   checkFinite(kp3, c3, "keypoints3d", 3);
+  // Through the lens: raw pixels -> the pinhole camera with the same intrinsics (the same ray).
+  size_t outsideLens = 0;
+  if (!lens.isPinhole()) {
+    const hawor::CameraModel<double> model{cam, lens};
+    if (c2.empty()) c2.assign(T * K, 1.0);
+    for (size_t t = 0; t < T; ++t) {
+      if (!valid[t]) continue;
+      for (size_t k = 0; k < K; ++k) {
+        if (c2[t * K + k] == 0) continue;
+        double* p = &kp2[(t * K + k) * 2];
+        hawor::Vec2<double> u;
+        if (model.undistortPixel(hawor::Vec2<double>(p[0], p[1]), u)) {
+          p[0] = u(0), p[1] = u(1);
+        } else {
+          p[0] = p[1] = 0;
+          c2[t * K + k] = 0;
+          ++outsideLens;
+        }
+      }
+    }
+  }
 
   // --- fit, frame by frame ------------------------------------------------------------------------
   const size_t J1 = static_cast<size_t>(m.numJoints() - 1), B = static_cast<size_t>(m.numBetas());
@@ -221,10 +259,12 @@ int cmdFit(int argc, char** argv) {
                           .str("model", loaded.source)
                           .str("kind", hawor::handModelKindName(loaded.kind))
                           .str("side", sideName(m))
+                          .str("camera", lens.toString())
                           .integer("frames", static_cast<long long>(T))
                           .integer("fitted", static_cast<long long>(nFitted))
                           .integer("skipped", static_cast<long long>(skipped))
                           .integer("failed", static_cast<long long>(failed))
+                          .integer("keypoints_outside_lens", static_cast<long long>(outsideLens))
                           .num("median_reproj_rms_px", hawor::median(rmsFitted))
                           .num("median_ms_per_frame", hawor::median(msPerFrame))
                           .dump()

@@ -1,5 +1,7 @@
 // hawor slam — monocular SLAM with dual hand masking over a folder of frames
 // (include/hawor/slam/mono_slam.hpp). Reads the images in name order, masks of the same names.
+// With a lens (--camera), frames and masks are rectified to the virtual pinhole camera with the
+// same intrinsics (render/rectify.hpp) before the SLAM sees them.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,21 +16,29 @@
 #include "hawor/io/image_file.hpp"
 #include "hawor/io/npz.hpp"
 #include "hawor/io/tum.hpp"
+#include "hawor/render/rectify.hpp"
+#include "hawor/render/resample.hpp"
 #include "hawor/slam/mono_slam.hpp"
 
 namespace hawor_cli {
 namespace {
 
 const char* kSlamHelp =
-    "usage: hawor slam --images DIR --intrinsics fx,fy,cx,cy [--masks DIR] [--no-mask]\n"
-    "                  --out TRAJ.tum [--keyframe-depths KD.npz] [--stats STATS.json]\n"
+    "usage: hawor slam --images DIR --intrinsics fx,fy,cx,cy [--camera LENS] [--masks DIR]\n"
+    "                  [--no-mask] --out TRAJ.tum [--keyframe-depths KD.npz] [--stats STATS.json]\n"
     "                  [--fps F] [--max-frames N] [--refine-focal [--focal-prior S]] [--verbose]\n"
     "\n"
     "Sparse monocular SLAM (KLT tracks, PnP, keyframes, sliding-window and global bundle\n"
     "adjustment) with the hands masked out of the front end and the bundle adjustment.\n"
     "\n"
     "  --images DIR          frames (.png/.jpg/.bmp), processed in file-name order\n"
-    "  --intrinsics fx,fy,cx,cy  pinhole intrinsics in pixels (pixel centres at integers)\n"
+    "  --intrinsics fx,fy,cx,cy  intrinsics in pixels (pixel centres at integers)\n"
+    "  --camera LENS         the lens: pinhole (default), opencv:k1,k2,p1,p2[,k3] or\n"
+    "                        fisheye:k1,k2,k3,k4 (the second line of a hawor synth\n"
+    "                        intrinsics.txt); frames (bilinear) and masks (nearest) are rectified\n"
+    "                        to the pinhole camera with the same intrinsics, which the SLAM runs\n"
+    "                        on (a fisheye's periphery beyond its field is cut); the poses are the\n"
+    "                        real camera's, --keyframe-depths pixels are the rectified image's\n"
     "  --masks DIR           hand masks, PNGs named like the frames (hand pixels non-zero);\n"
     "                        a frame without a mask file has no hands\n"
     "  --no-mask             ignore --masks (the unmasked ablation)\n"
@@ -49,7 +59,9 @@ const char* kSlamHelp =
     "                        PnP, keyframes, losses)\n"
     "\n"
     "Prints one JSON object: frames, keyframes, tracked, interpolated, lost, relocalised,\n"
-    "losses, resets, relocalisations, initialised, median_ms_per_frame, p95_ms_per_frame, and\n"
+    "losses, resets, relocalisations, initialised, camera, rectified_outside (pixels of the\n"
+    "rectified image the lens does not see), median_ms_per_frame and p95_ms_per_frame (with the\n"
+    "rectification), and\n"
     "with --refine-focal: focal_fx (the focal used), focal_guess_fx, focal_refined, focal_std\n"
     "(posterior std of log f, null when declined) and focal_reason.\n";
 
@@ -77,7 +89,8 @@ bool fileExists(const std::string& p) {
 
 int cmdSlam(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"images", "intrinsics", "masks", "out", "keyframe-depths", "stats", "fps", "max-frames", "focal-prior"},
+                  {"images", "intrinsics", "camera", "masks", "out", "keyframe-depths", "stats", "fps", "max-frames",
+                   "focal-prior"},
                   {"no-mask", "verbose", "refine-focal"});
   if (args.help()) {
     std::fputs(kSlamHelp, stdout);
@@ -86,6 +99,12 @@ int cmdSlam(int argc, char** argv) {
   const std::string dir = args.required("images");
   const std::vector<double> k = parseList(args.required("intrinsics"), "--intrinsics");
   if (k.size() != 4 || !(k[0] > 0) || !(k[1] > 0)) throw UsageError("--intrinsics expects fx,fy,cx,cy with fx, fy > 0");
+  hawor::Lens<double> lens;
+  try {
+    lens = hawor::Lens<double>::parse(args.get("camera", "pinhole"));
+  } catch (const hawor::Error& e) {
+    throw UsageError(std::string("--camera: ") + (e.what() + 7));  // without "hawor: "
+  }
   const std::string out = args.required("out");
   const double fps = args.number("fps", 30.0);
   if (!(fps > 0)) throw UsageError("--fps must be > 0");
@@ -113,9 +132,22 @@ int cmdSlam(int argc, char** argv) {
   const bool verbose = args.flag("verbose");
   if (verbose) opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };
   hawor::MonoSlam<double> slam(cam, opt);
+  // The lens: rectification to the pinhole camera with the same intrinsics and size (an exact
+  // no-op for a pinhole lens), sized from the first frame.
+  hawor::ImageU8 first = hawor::readImage(dir + "/" + names[0]);
+  hawor::CameraModel<double> model{cam, lens};
+  model.intrinsics.width = first.width, model.intrinsics.height = first.height;
+  try {
+    model.validate();
+  } catch (const hawor::Error& e) {
+    throw UsageError(std::string("--camera ") + args.get("camera", "pinhole") + " with --intrinsics on " +
+                     std::to_string(first.width) + "x" + std::to_string(first.height) + " frames: " + (e.what() + 7));
+  }
+  const hawor::RectifyMap<double> rectify(model);
+  hawor::ImageU8 grey, rectImage, rectMask, slamMask;
   std::vector<double> ms;
   for (std::size_t i = 0; i < names.size(); ++i) {
-    const hawor::ImageU8 img = hawor::readImage(dir + "/" + names[i]);
+    const hawor::ImageU8 img = i == 0 ? std::move(first) : hawor::readImage(dir + "/" + names[i]);
     if (i == 0) {
       cam.width = img.width, cam.height = img.height;
     }
@@ -139,7 +171,26 @@ int cmdSlam(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     hawor::SlamStatus st;
     try {
-      st = slam.process(img, haveMask ? &mask : nullptr);
+      if (rectify.identity()) {
+        st = slam.process(img, haveMask ? &mask : nullptr);
+      } else {
+        if (img.width != model.intrinsics.width || img.height != model.intrinsics.height) {
+          throw hawor::Error("the frame is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             " but the first frame was " + std::to_string(model.intrinsics.width) + "x" +
+                             std::to_string(model.intrinsics.height));
+        }
+        // grey first (one channel to resample), then the remap; the mask by nearest pixel, with
+        // the region the lens does not see added (no corners on its edge)
+        grey = img.channels == 1 ? img : hawor::downscaleBox(img, img.width, img.height, true);
+        rectImage = rectify.remapBilinear(grey);
+        if (haveMask) rectMask = rectify.remapNearest(mask);
+        const bool useMask = rectify.needsSlamMask(haveMask ? rectMask.data.data() : nullptr);
+        if (useMask) {
+          slamMask.resize(rectify.width(), rectify.height(), 1);
+          rectify.slamMask(haveMask ? rectMask.data.data() : nullptr, slamMask.data.data());
+        }
+        st = slam.process(rectImage, useMask ? &slamMask : nullptr);
+      }
     } catch (const hawor::Error& e) {
       throw hawor::Error(names[i] + ": " + e.what());
     }
@@ -194,6 +245,8 @@ int cmdSlam(int argc, char** argv) {
       .integer("head_model_frames", r.numHeadModelFrames)
       .raw("initialised", r.initialised ? "true" : "false")
       .raw("masked", useMasks ? "true" : "false")
+      .str("camera", lens.toString())
+      .integer("rectified_outside", static_cast<long long>(rectify.numOutside()))
       .num("median_ms_per_frame", hawor::percentile(ms, 0.5))
       .num("p95_ms_per_frame", hawor::percentile(ms, 0.95));
   if (opt.refineFocal) {

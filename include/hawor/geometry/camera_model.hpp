@@ -124,6 +124,35 @@ struct CameraModel {
     return c;
   }
 
+  /// A width × height camera whose lens spans `diagonalFovDeg` across the image diagonal: square
+  /// pixels, principal point at the image centre, f = (√(w² + h²)/2) / |m| with m the lens'
+  /// projection of the ray at half the field of view along the diagonal (for a pinhole lens,
+  /// PinholeCamera::fromFov; tangential terms move that point slightly off the diagonal, by a
+  /// small fraction of a degree). Validated: throws hawor::Error when the lens folds before the
+  /// corners or a pinhole-type lens is asked for 180° or more.
+  static CameraModel fromFov(int width, int height, const Lens<Scalar>& lens, Scalar diagonalFovDeg) {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    if (!(diagonalFovDeg > Scalar(0) && diagonalFovDeg < Scalar(360))) {
+      throw Error("CameraModel::fromFov: diagonal field of view must be in (0, 360) degrees");
+    }
+    if (lens.kind == LensKind::Pinhole) {
+      CameraModel c{PinholeCamera<Scalar>::fromFov(width, height, diagonalFovDeg), lens};
+      c.validate();
+      return c;
+    }
+    const Scalar half = diagonalFovDeg * Constants<Scalar>::pi() / Scalar(360);
+    lens.validate(half);
+    CameraModel c{PinholeCamera<Scalar>::fromFov(width, height, Scalar(90)), lens};  // size, centre
+    const Scalar diag = sqrt(Scalar(width) * Scalar(width) + Scalar(height) * Scalar(height));
+    const Vec3<Scalar> p(sin(half) * Scalar(width) / diag, sin(half) * Scalar(height) / diag, cos(half));
+    const Scalar m = lens.project(p).norm();
+    c.intrinsics.fx = c.intrinsics.fy = Scalar(0.5) * diag / m;
+    c.validate();
+    return c;
+  }
+
   template <typename T>
   CameraModel<T> cast() const {
     return CameraModel<T>{intrinsics.template cast<T>(), lens.template cast<T>()};
