@@ -62,8 +62,8 @@ const char* kSynthHelp =
     "benchmarks with its ffmpeg arguments, per-frame sub-frames and gains) and DIR/meta.json.\n"
     "Prints one JSON object: preset, capture, lens, seed, frames, width, height, fps,\n"
     "coverage_max / coverage_mean (hand pixels / image), frames_coverage_20 (frames with hands on\n"
-    ">= 20 % of the image), valid_left / valid_right (frames), subframes_mean, render_ms_median,\n"
-    "render_ms_p95, write_ms_median, out.\n";
+    ">= 20 % of the image), valid_left / valid_right (frames), subframes_mean, render_ms_mean,\n"
+    "render_ms_median, render_ms_p95, write_ms_median, out.\n";
 
 /// The help lines of the capture options (from capture.hpp's field table).
 std::string captureOptionsHelp() {
@@ -141,7 +141,7 @@ int cmdSynth(int argc, char** argv) {
   if (args.help()) {
     const std::string help = kSynthHelp;
     const std::size_t at = help.find("\nWrites DIR/");
-    std::fputs((help.substr(0, at + 1) + captureOptionsHelp() + help.substr(at)).c_str(), stdout);
+    std::fputs((help.substr(0, at) + captureOptionsHelp() + help.substr(at)).c_str(), stdout);
     return 0;
   }
   if (!args.positional().empty()) throw UsageError("unexpected argument '" + args.positional()[0] + "'");
@@ -229,6 +229,11 @@ int cmdSynth(int argc, char** argv) {
   wo.meta = {{"hand_model_left", leftSource}, {"hand_model_right", rightSource}};
   const hawor::synth::SynthWriteSummary sum = hawor::synth::writeSynthSequence(seq, out, wo);
 
+  auto mean = [](const std::vector<double>& v) {
+    double t = 0;
+    for (double x : v) t += x;
+    return v.empty() ? 0.0 : t / static_cast<double>(v.size());
+  };
   double subframes = 0;
   for (int i = 0; i < sum.frames; ++i) subframes += sum.subframes[static_cast<std::size_t>(i)];
   JsonObject j;
@@ -246,6 +251,7 @@ int cmdSynth(int argc, char** argv) {
       .integer("valid_left", sum.validFrames[0])
       .integer("valid_right", sum.validFrames[1])
       .num("subframes_mean", sum.frames > 0 ? subframes / sum.frames : 0)
+      .num("render_ms_mean", mean(sum.renderMs))
       .num("render_ms_median", hawor::percentile(sum.renderMs, 0.5))
       .num("render_ms_p95", hawor::percentile(sum.renderMs, 0.95))
       .num("write_ms_median", hawor::percentile(sum.writeMs, 0.5))
