@@ -2,7 +2,7 @@
 // cli.mjs: the headless hawor pipeline on a video file (node glue only: arguments, ffmpeg
 // decoding, progress, files; every algorithm is in web/src/pipeline/run.mjs and the C++ core).
 //
-//   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR]
+//   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera LENS] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale]
@@ -10,6 +10,11 @@
 //
 // --sample runs the built-in synthetic sample (sample.webm, 60 frames of a table scene) with its
 // true focal from sample.json (unless --focal or --fov is given).
+//
+// --camera LENS: the lens, 'pinhole' (default), 'opencv:k1,k2,p1,p2[,k3]' or
+// 'fisheye:k1,k2,k3,k4' (run.mjs: perspective hand crops, keypoints undistorted, the SLAM on
+// rectified frames); a string that does not parse, a coefficient that is not finite, or a lens
+// that folds inside the video's frame is a usage error naming the problem.
 //
 // Writes DIR/world.npz, DIR/hands_cam.npz, DIR/camera.tum and DIR/result.json (exports.mjs
 // describes them), prints a progress bar and a per-stage timing table on stderr and one JSON
@@ -33,14 +38,14 @@ import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { builtFile, loadCore as loadCoreModule } from './src/core.mjs';
-import { runPipeline, MAX_PIXELS } from './src/pipeline/run.mjs';
+import { runPipeline, cameraIntrinsics, MAX_PIXELS } from './src/pipeline/run.mjs';
 import { eyeHeightError } from './src/pipeline/eye_height.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
-const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -61,6 +66,7 @@ export function parseArgs(argv) {
     else if (a === '--sample') o.sample = true;
     else if (a === '--focal') o.focalPx = num(next(), '--focal', 0);
     else if (a === '--fov') { o.fovDeg = num(next(), '--fov', 1); if (o.fovDeg >= 179) throw usage('--fov must be below 179 degrees'); }
+    else if (a === '--camera') { o.camera = next(); if (!o.camera.trim()) throw usage('--camera needs a lens (pinhole, opencv:k1,k2,p1,p2[,k3] or fisheye:k1,k2,k3,k4)'); }
     else if (a === '--no-refine-focal') o.refineFocal = false;
     else if (a === '--mano') o.mano = next();
     else if (a === '--depth-model') o.depthModel = next();
@@ -294,6 +300,14 @@ export async function main(argv) {
   ort.env.wasm.numThreads = o.threads;
   ort.env.logLevel = 'error';
   const coreLoadMs = performance.now() - tLoad;
+  if (o.camera !== undefined) {
+    // the lens against the frame it must cover (the core's parse and validate messages)
+    try {
+      cameraIntrinsics(core, width, height, { focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera });
+    } catch (e) {
+      throw usage(`--camera: ${e.message}`);
+    }
+  }
   const decodeTiming = { decode: 0 };
   const total = o.maxFrames ? Math.min(o.maxFrames, info.frameCount ?? Infinity) : info.frameCount;
   const source = { width, height, fps: info.fps, frameCount: Number.isFinite(total) ? total : null,
@@ -301,7 +315,7 @@ export async function main(argv) {
   const cpu0 = process.cpuUsage();
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
-    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
+    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
     groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight,
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);
@@ -321,6 +335,7 @@ export async function main(argv) {
   const count = (a) => Array.from(a).reduce((s, v) => s + (v ? 1 : 0), 0);
   const summary = {
     out: o.out, frames: T, width, height, fps: result.fps, focal: result.intrinsics.fx, focalSource: result.intrinsics.focalSource,
+    camera: result.intrinsics.lens,
     focalRefined: result.intrinsics.refined, focalGuess: result.intrinsics.guessFx,
     noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
     scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,

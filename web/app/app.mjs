@@ -115,7 +115,7 @@ function onWorker(m, resolveReady) {
 function errorText(kind, message) {
   const prefix = { mano: 'Wrong MANO file', short: 'Clip too short', nohands: 'No hands found', video: 'Unsupported or corrupt video',
     resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem',
-    'eye-height': 'Wrong camera height' }[kind];
+    'eye-height': 'Wrong camera height', camera: 'Wrong camera model' }[kind];
   return prefix ? `${prefix}: ${message}` : message;
 }
 
@@ -166,6 +166,8 @@ async function processVideo(url, name, sampleMeta = null) {
     if (focal) options.focalPx = focal * size.scale;
     else if (fov) options.fovDeg = fov;
     else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
+    const camera = $('opt-camera').value.trim();
+    if (camera) options.camera = camera;  // checked by the core in the worker (Lens::parse, CameraModel::validate)
     const eye = number('opt-eyeheight');
     if (eye) {
       const bad = eyeHeightError(eye);
@@ -179,7 +181,8 @@ async function processVideo(url, name, sampleMeta = null) {
     }
     run.meta = { width: size.width, height: size.height, fps, frameCount, original: meta };
     ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}`
-      + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default');
+      + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default')
+      + (options.camera ? `, camera model ${options.camera}` : '');
     app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount }, options });
     run.started = true;
     const wait = () => new Promise((resolve) => {
@@ -255,7 +258,7 @@ function onResult(result, meshes) {
   const sum = scene.summary();
   const h = (s) => (sum.hands[s] ? `${sum.hands[s].frames} frames (${countFlags(result, s, 'infilled')} infilled)` : 'none');
   ui.summary.textContent = [
-    `${result.frameCount} frames, ${result.width}×${result.height}, ${result.fps} fps; focal ${result.intrinsics.fx.toFixed(1)} px (${result.intrinsics.focalSource || '?'})`,
+    `${result.frameCount} frames, ${result.width}×${result.height}, ${result.fps} fps; focal ${result.intrinsics.fx.toFixed(1)} px (${result.intrinsics.focalSource || '?'})${result.intrinsics.lens && result.intrinsics.lens !== 'pinhole' ? `, camera model ${result.intrinsics.lens}` : ''}`,
     `left hand: ${h('left')} · right hand: ${h('right')} · camera path: ${sum.cameraPath} poses · SLAM points: ${sum.points}`,
     `metric scale: ${result.scale ? `${Number(result.scale.scale).toFixed(3)} (${result.scale.method}, confidence ${Number(result.scale.confidence).toFixed(2)})` : '–'}${groundText(result.scale && result.scale.ground)}`,
     result.timings ? `timings: ${Object.entries(result.timings).map(([k, v]) => `${k} ${(v / 1000).toFixed(1)} s`).join(' · ')}` : '',

@@ -164,6 +164,7 @@ async function start(meta, options) {
     if (options.focalPx) opts.focalPx = options.focalPx;
     if (options.fovDeg) opts.fovDeg = options.fovDeg;
     if (options.eyeHeight) opts.eyeHeight = options.eyeHeight;
+    if (options.camera) opts.camera = options.camera;
     if (options.depth) opts.depthModel = { bytes: new Uint8Array(options.depth.bytes), config: options.depth.config };
     const hooks = {
       signal: controller.signal,
@@ -188,6 +189,7 @@ function classify(e) {
   const m = String(e && e.message || e);
   if (/too short|at least \d+ frames/i.test(m)) return 'short';
   if (/no hand/i.test(m)) return 'nohands';
+  if (/^the camera model /.test(m)) return 'camera';
   return e && e.name === 'HaworError' ? 'core' : 'pipeline';
 }
 

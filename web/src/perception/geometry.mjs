@@ -115,6 +115,56 @@ export function cropImage(image, roi, outW, outH = outW, out = new Float32Array(
   return out;
 }
 
+/**
+ * Samples an outW x outH crop of `image` at the source pixels `map` gives (map[2 (j outW + i)],
+ * [+1] = x, y of crop pixel (i, j); NaN = nothing there, read black), bilinearly, into NHWC
+ * float RGB in 0..1, with cropImage's conventions and borders. The perspective crops through a
+ * lens: the core computes the map (LensCamera.cropMap, render/lens_crop.hpp).
+ */
+export function cropImageMapped(image, map, outW, outH = outW, out = new Float32Array(outW * outH * 3), border = 'zero') {
+  if (border !== 'zero' && border !== 'replicate') throw new Error(`cropImageMapped: border '${border}' (zero or replicate)`);
+  const replicate = border === 'replicate';
+  const { width: W, height: H, data } = image;
+  const ch = image.channels ?? 4;
+  if (ch !== 3 && ch !== 4) throw new Error(`cropImageMapped: ${ch} channels (3 = RGB or 4 = RGBA expected)`);
+  if (data.length < W * H * ch) throw new Error(`cropImageMapped: ${data.length} bytes for a ${W}x${H}x${ch} image`);
+  if (map.length !== 2 * outW * outH) throw new Error(`cropImageMapped: a map of ${map.length} numbers for ${outW}x${outH}`);
+  if (out.length !== outW * outH * 3) throw new Error(`cropImageMapped: output of ${out.length} floats for ${outW}x${outH}x3`);
+  const k = 1 / 255;
+  for (let p = 0, o = 0; p < outW * outH; ++p, o += 3) {
+    const x = map[2 * p];
+    const y = map[2 * p + 1];
+    let r = 0;
+    let g = 0;
+    let b = 0;
+    if (Number.isFinite(x) && Number.isFinite(y)) {
+      const xf = Math.floor(x);
+      const yf = Math.floor(y);
+      const fx = x - xf;
+      const fy = y - yf;
+      for (let q = 0; q < 4; ++q) {
+        let xx = xf + (q & 1);
+        let yy = yf + (q >> 1);
+        if (xx < 0 || yy < 0 || xx >= W || yy >= H) {
+          if (!replicate) continue;
+          xx = Math.min(Math.max(xx, 0), W - 1);
+          yy = Math.min(Math.max(yy, 0), H - 1);
+        }
+        const wgt = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
+        if (wgt === 0) continue;
+        const i = (yy * W + xx) * ch;
+        r += wgt * data[i];
+        g += wgt * data[i + 1];
+        b += wgt * data[i + 2];
+      }
+    }
+    out[o] = r * k;
+    out[o + 1] = g * k;
+    out[o + 2] = b * k;
+  }
+  return out;
+}
+
 /** Intersection over union of two axis-aligned boxes {cx, cy, w, h}. */
 export function iou(a, b) {
   const ix = Math.min(a.cx + a.w / 2, b.cx + b.w / 2) - Math.max(a.cx - a.w / 2, b.cx - b.w / 2);

@@ -8,8 +8,14 @@
 // Frames: { width, height, data: Uint8Array | Uint8ClampedArray, channels: 3 | 4 } (RGB from a
 // decoder, or a canvas ImageData with channels 4). Outputs are in image pixels (docs/design.md §2) and
 // world landmarks in metres (see landmarks.mjs).
+//
+// Lenses: with the `lens` option the landmark crops are locally perspective views through the
+// camera's lens (the hand network was trained on perspective images), computed by the core
+// (LensCamera, render/lens_crop.hpp); ROIs stay in image pixels and landmarks map back through
+// the same map. The palm detector keeps its letterbox of the whole image.
 
-import { cropImage, letterboxRoi, iou } from './geometry.mjs';
+import { cropImage, cropImageMapped, letterboxRoi, iou } from './geometry.mjs';
+import { cropBoxFiltered } from './prefilter.mjs';
 import { PALM_INPUT_SIZE, decodePalms, weightedNms, palmToImage, roiFromPalm } from './palm.mjs';
 import { LANDMARK_INPUT_SIZE, decodeLandmarks, roiFromLandmarks } from './landmarks.mjs';
 
@@ -23,6 +29,9 @@ export class HandTracker {
    *                      detectGap: while at least one hand is tracked, the detector (looking for
    *                      the others) runs only after this many frames without it (0: every frame,
    *                      MediaPipe's behaviour); with no hand tracked it runs on every frame
+   *                      lens: a camera with a lens, { cropMap(roi, n) -> { map: Float32Array(2n²),
+   *                      rotation: (9) }, cropToImage(roi, uv: Float64Array) -> Float64Array }
+   *                      (the core's LensCamera); null or absent: affine crops (a pinhole camera)
    */
   static async create(ort, palmModel, landmarkModel, options = {}) {
     const so = { graphOptimizationLevel: 'all', ...(options.sessionOptions ?? {}) };
@@ -31,8 +40,11 @@ export class HandTracker {
     return new HandTracker(ort, palm, landmark, options);
   }
 
-  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0 } = {}) {
-    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap });
+  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0, lens = null,
+    candidateScore = minPalmScore, candidatePresence = minPresence, maxCandidates = maxHands, palmPrefilter = 0, redetectOnLoss = false,
+    motion = false, motionGrow = 0, coast = 0, memory = 0, holdPresence = minPresence, refine = false } = {}) {
+    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap, lens });
+    Object.assign(this, { candidateScore, candidatePresence, maxCandidates, palmPrefilter, redetectOnLoss, motion, motionGrow, coast, memory, holdPresence, refine });
     this.framesWithoutDetect = 0;
     for (const [s, what, n] of [[palmSession, 'palm', 2], [landmarkSession, 'landmark', 4]]) {
       if (s.inputNames.length !== 1 || s.outputNames.length !== n) {
@@ -42,66 +54,183 @@ export class HandTracker {
     this.palmInput = new Float32Array(PALM_INPUT_SIZE * PALM_INPUT_SIZE * 3);
     this.landmarkInput = new Float32Array(LANDMARK_INPUT_SIZE * LANDMARK_INPUT_SIZE * 3);
     this.tracked = []; // ROIs for the next frame
+    this.trackStates = []; // their tracks (identity, handedness evidence, motion), see newTrack
+    this.lostTracks = []; // tracks lost within the last `memory` frames
+    this.frame = 0;
+    this.nextId = 1;
     this.stats = { palmRuns: 0, landmarkRuns: 0 };
   }
 
-  /** Palm detections in image pixels, best first (weighted NMS, at most maxHands). */
-  async detectPalms(image) {
+  /** Palm detections in image pixels, best first (weighted NMS, at most maxDetections). */
+  async detectPalms(image, { minScore = this.minPalmScore, maxDetections = this.maxHands } = {}) {
     const S = PALM_INPUT_SIZE;
     const roi = letterboxRoi(image.width, image.height);
-    cropImage(image, roi, S, S, this.palmInput, 'zero'); // letterbox bars are black
+    // letterbox bars are black
+    if (this.palmPrefilter > 0) cropBoxFiltered(image, roi, S, S, this.palmInput, this.palmPrefilter);
+    else cropImage(image, roi, S, S, this.palmInput, 'zero');
     const feeds = { [this.palmSession.inputNames[0]]: new this.ort.Tensor('float32', this.palmInput, [1, S, S, 3]) };
     const out = await this.palmSession.run(feeds);
     this.stats.palmRuns += 1;
-    const dets = weightedNms(decodePalms(out.Identity.data, out.Identity_1.data, { minScore: this.minPalmScore }), { iouThreshold: 0.3, maxDetections: this.maxHands });
+    const dets = weightedNms(decodePalms(out.Identity.data, out.Identity_1.data, { minScore }), { iouThreshold: 0.3, maxDetections });
     return dets.map((d) => palmToImage(d, roi));
   }
 
   /** The landmark network on one ROI (see landmarks.mjs for the result). */
   async landmarks(image, roi) {
     const S = LANDMARK_INPUT_SIZE;
-    cropImage(image, roi, S, S, this.landmarkInput, 'replicate'); // MediaPipe's default border
+    let lensCrop = null;
+    if (this.lens) {
+      let crop = null;
+      try {
+        crop = this.lens.cropMap(roi, S);
+      } catch {
+        crop = null; // a ROI centre beyond the lens' reach: the affine crop
+      }
+      if (crop) {
+        cropImageMapped(image, crop.map, S, S, this.landmarkInput, 'replicate');
+        lensCrop = { toImage: (uv) => this.lens.cropToImage(roi, uv), rotation: crop.rotation };
+      }
+    }
+    if (!lensCrop) cropImage(image, roi, S, S, this.landmarkInput, 'replicate'); // MediaPipe's default border
     const feeds = { [this.landmarkSession.inputNames[0]]: new this.ort.Tensor('float32', this.landmarkInput, [1, S, S, 3]) };
     const out = await this.landmarkSession.run(feeds);
     this.stats.landmarkRuns += 1;
     const plain = Object.fromEntries(Object.entries(out).map(([k, v]) => [k, v.data]));
-    return decodeLandmarks(plain, roi, { mirrored: this.mirrored });
+    return decodeLandmarks(plain, roi, { mirrored: this.mirrored, lensCrop });
   }
 
   /** Forget the tracked hands (e.g. after a cut): the next frame runs the detector. */
-  reset() { this.tracked = []; }
+  reset() {
+    this.tracked = [];
+    this.trackStates = [];
+    this.lostTracks = [];
+  }
+
+  /** A new track on `roi`: its id, handedness evidence (sum of the frames' clamped log-odds of
+   *  a right hand), the frame it was last seen on, its velocity (ROI centre, pixels a frame)
+   *  and the frames it has missed since. */
+  newTrack(roi) {
+    return { id: this.nextId++, roi, logOdds: 0, frames: 0, lastFrame: this.frame, vel: [0, 0], misses: 0 };
+  }
+
+  /** The ROI a track is looked for in on this frame: its last one, moved on at its velocity
+   *  (with `motion`) and enlarged by motionGrow x the distance moved over its width. */
+  searchRoi(st) {
+    if (!this.motion) return st.roi;
+    const gap = this.frame - st.lastFrame;
+    const dx = st.vel[0] * gap;
+    const dy = st.vel[1] * gap;
+    const grow = 1 + Math.min(0.5, (this.motionGrow * Math.hypot(dx, dy)) / st.roi.w);
+    return { ...st.roi, cx: st.roi.cx + dx, cy: st.roi.cy + dy, w: st.roi.w * grow, h: st.roi.h * grow };
+  }
+
+  /** Hand h was found on this frame by track st: its next ROI, velocity and handedness. */
+  confirm(st, h) {
+    const roi = roiFromLandmarks(h.landmarks);
+    const gap = this.frame - st.lastFrame;
+    if (st.frames > 0 && gap > 0) st.vel = [(roi.cx - st.roi.cx) / gap, (roi.cy - st.roi.cy) / gap];
+    st.roi = roi;
+    st.lastFrame = this.frame;
+    st.frames += 1;
+    st.misses = 0;
+    const L = Math.log(0.95 / 0.05); // one frame's label flips now and then with full confidence
+    const p = h.handedness === 'right' ? h.handednessScore : 1 - h.handednessScore;
+    st.logOdds += Math.max(-L, Math.min(L, Math.log(p / (1 - p))));
+    h.track = { id: st.id, pRight: 1 / (1 + Math.exp(-st.logOdds)), frames: st.frames };
+  }
+
+  /** The lost track a new hand (next ROI `roi`) continues: its predicted centre within its ROI
+   *  width of the hand's, the nearest such; removed from the lost tracks. */
+  revive(roi) {
+    let best = -1;
+    let bestD = Infinity;
+    this.lostTracks.forEach((st, k) => {
+      const gap = this.frame - st.lastFrame;
+      const d = Math.hypot(roi.cx - (st.roi.cx + st.vel[0] * gap), roi.cy - (st.roi.cy + st.vel[1] * gap));
+      if (d < Math.max(st.roi.w, roi.w) && d < bestD) { best = k; bestD = d; }
+    });
+    return best < 0 ? null : this.lostTracks.splice(best, 1)[0];
+  }
 
   /**
    * One video frame: landmarks for each tracked hand (tracks that converged on one hand merged);
    * the detector only if fewer than maxHands remain, its palms added where they do not overlap a
-   * tracked hand (IoU of the ROIs' bounding squares < 0.5). Hands below minPresence are dropped. Returns [{...decodeLandmarks, source:
-   * 'track' | 'detect'}] and keeps their next ROIs.
+   * tracked hand (IoU of the ROIs' bounding squares < 0.5) and their landmarks are not a hand
+   * already found. Hands below minPresence are dropped. Returns [{...decodeLandmarks, source:
+   * 'track' | 'detect', track: {id, pRight, frames}}] and keeps their next ROIs.
    */
   async track(image) {
+    this.frame += 1;
     const box = (r) => ({ cx: r.cx, cy: r.cy, w: Math.max(r.w, r.h), h: Math.max(r.w, r.h) });
+    // tracks of this.tracked (a caller may set it: those start as new tracks)
+    const states = this.tracked.map((roi, j) => (this.trackStates[j] && this.trackStates[j].roi === roi ? this.trackStates[j] : this.newTrack(roi)));
     const hands = [];
-    for (const roi of this.tracked) {
-      const h = await this.landmarks(image, roi);
-      if (h.presence < this.minPresence) continue;
-      // two tracks that converged on one hand (MediaPipe associates them the same way, IoU > 0.5
-      // of the next ROIs): keep the more confident one
+    const owners = []; // the track of each hand
+    const coasting = [];
+    let lost = 0;
+    const sameHand = (h) => {
       const next = box(roiFromLandmarks(h.landmarks));
-      const dup = hands.findIndex((o) => iou(box(roiFromLandmarks(o.landmarks)), next) > 0.5);
-      if (dup < 0) hands.push({ ...h, source: 'track' });
-      else if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
+      return hands.findIndex((o) => iou(box(roiFromLandmarks(o.landmarks)), next) > 0.5);
+    };
+    for (const st of states) {
+      const h = await this.landmarks(image, this.searchRoi(st));
+      const held = st.frames >= 2 && h.presence >= this.holdPresence;
+      if (h.presence < this.minPresence && !held) {
+        lost += 1;
+        st.misses += 1;
+        (st.misses <= this.coast ? coasting : this.lostTracks).push(st);
+        continue;
+      }
+      // two tracks that converged on one hand (MediaPipe associates them the same way, IoU > 0.5
+      // of the next ROIs): keep the more confident landmarks, and the track that moved less
+      const dup = sameHand(h);
+      if (dup < 0) {
+        hands.push({ ...h, source: 'track' });
+        owners.push(st);
+        continue;
+      }
+      const c = roiFromLandmarks(h.landmarks);
+      const moved = (s) => Math.hypot(c.cx - s.roi.cx, c.cy - s.roi.cy);
+      if (moved(st) < moved(owners[dup])) owners[dup] = st;
+      if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
     }
-    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap);
+    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap || (this.redetectOnLoss && lost > 0));
     this.framesWithoutDetect = detect ? 0 : this.framesWithoutDetect + 1;
     if (detect) {
-      for (const palm of await this.detectPalms(image)) {
-        if (hands.length >= this.maxHands) break;
+      // palm candidates down to candidateScore, each confirmed by the landmark network's presence
+      // on its crop (minPresence above minPalmScore, candidatePresence below)
+      const palms = await this.detectPalms(image, { minScore: Math.min(this.minPalmScore, this.candidateScore), maxDetections: this.maxHands + this.maxCandidates });
+      let verified = 0;
+      for (const palm of palms) {
+        if (hands.length >= this.maxHands || verified >= this.maxCandidates) break;
         const roi = roiFromPalm(palm);
         if (hands.some((h) => iou(box(roiFromLandmarks(h.landmarks)), box(roi)) >= 0.5)) continue;
-        const h = await this.landmarks(image, roi);
-        if (h.presence >= this.minPresence) hands.push({ ...h, palm, source: 'detect' });
+        verified += 1;
+        let h = await this.landmarks(image, roi);
+        const need = palm.score >= this.minPalmScore ? this.minPresence : this.candidatePresence;
+        if (h.presence < need && this.refine && h.presence >= 0.02) {
+          // the palm's ROI frames the hand less well than its landmarks' (the crops the network
+          // tracks with): look again there
+          const h2 = await this.landmarks(image, roiFromLandmarks(h.landmarks));
+          if (h2.presence > h.presence) h = h2;
+        }
+        if (h.presence < need || sameHand(h) >= 0) continue;
+        const next = roiFromLandmarks(h.landmarks);
+        let st = null;
+        const k = coasting.findIndex((s) => Math.hypot(next.cx - s.roi.cx, next.cy - s.roi.cy) < Math.max(s.roi.w, next.w));
+        if (k >= 0) st = coasting.splice(k, 1)[0];
+        else st = this.revive(next) ?? this.newTrack(roi);
+        hands.push({ ...h, palm, source: 'detect' });
+        owners.push(st);
       }
     }
-    this.tracked = hands.map((h) => roiFromLandmarks(h.landmarks));
+    hands.forEach((h, j) => this.confirm(owners[j], h));
+    // coasting tracks are looked for again on the next frame, while there is room
+    const keep = coasting.slice(0, Math.max(0, this.maxHands - hands.length));
+    this.lostTracks.push(...coasting.slice(keep.length));
+    this.trackStates = [...owners, ...keep];
+    this.tracked = this.trackStates.map((st) => st.roi);
+    this.lostTracks = this.lostTracks.filter((st) => this.frame - st.lastFrame <= this.memory);
     return hands;
   }
 }

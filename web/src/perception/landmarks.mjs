@@ -24,10 +24,15 @@ const Z_NORMALIZE = 0.4;
  * @param outputs {Identity, Identity_1, Identity_2, Identity_3} as typed arrays
  * @param opts.mirrored  true when the image is a selfie view (MediaPipe's own assumption);
  *                       egocentric video is not mirrored (default), so the label is swapped
+ * @param opts.lensCrop  the crop was a perspective view through a lens (render/lens_crop.hpp):
+ *                       { toImage(uv: Float64Array(2N) crop-normalised) -> Float64Array(2N) image
+ *                       pixels (NaN outside the lens), rotation: (9) row-major, the virtual
+ *                       camera's axes in the camera frame }: landmarks map back through it and
+ *                       world landmarks turn into the camera's axes; without it the affine crop
  * @returns {presence, handedness: 'left'|'right', handednessScore, landmarks: Float32Array(63)
  *          image pixels (x, y) and z in pixels at the crop's scale, world: Float32Array(63) metres}
  */
-export function decodeLandmarks(outputs, roi, { mirrored = false } = {}) {
+export function decodeLandmarks(outputs, roi, { mirrored = false, lensCrop = null } = {}) {
   const lm = outputs.Identity;
   const world = outputs.Identity_3;
   if (!lm || lm.length !== 63 || !world || world.length !== 63 || !outputs.Identity_1 || !outputs.Identity_2) {
@@ -35,29 +40,47 @@ export function decodeLandmarks(outputs, roi, { mirrored = false } = {}) {
   }
   const S = LANDMARK_INPUT_SIZE;
   const landmarks = new Float32Array(63);
+  let mapped = null;
+  if (lensCrop) {
+    const uv = new Float64Array(2 * NUM_LANDMARKS);
+    for (let k = 0; k < NUM_LANDMARKS; ++k) { uv[2 * k] = lm[3 * k] / S - 0.5; uv[2 * k + 1] = lm[3 * k + 1] / S - 0.5; }
+    mapped = lensCrop.toImage(uv);
+  }
   for (let k = 0; k < NUM_LANDMARKS; ++k) {
-    const [x, y] = cropToImage(roi, lm[3 * k] / S - 0.5, lm[3 * k + 1] / S - 0.5);
+    const [x, y] = mapped ? [mapped[2 * k], mapped[2 * k + 1]] : cropToImage(roi, lm[3 * k] / S - 0.5, lm[3 * k + 1] / S - 0.5);
     landmarks[3 * k] = x;
     landmarks[3 * k + 1] = y;
     // MediaPipe: z / 224 / 0.4 (normalize_z, "the Z distribution of the training data"), then
     // times the ROI width
     landmarks[3 * k + 2] = (lm[3 * k + 2] / S / Z_NORMALIZE) * roi.w;
   }
-  // world landmarks: the crop's axes are the image axes rotated by r
+  // world landmarks: the crop's axes are the image axes rotated by r (through a lens: the
+  // virtual camera's image axes, then that camera's rotation into the camera frame)
   const c = Math.cos(roi.rotation);
   const s = Math.sin(roi.rotation);
   const w = new Float32Array(63);
+  const R = lensCrop ? lensCrop.rotation : null;
   for (let k = 0; k < NUM_LANDMARKS; ++k) {
     const x = world[3 * k];
     const y = world[3 * k + 1];
-    w[3 * k] = x * c - y * s;
-    w[3 * k + 1] = x * s + y * c;
-    w[3 * k + 2] = world[3 * k + 2];
+    const a = x * c - y * s;
+    const b = x * s + y * c;
+    const z = world[3 * k + 2];
+    if (R) {
+      w[3 * k] = R[0] * a + R[1] * b + R[2] * z;
+      w[3 * k + 1] = R[3] * a + R[4] * b + R[5] * z;
+      w[3 * k + 2] = R[6] * a + R[7] * b + R[8] * z;
+    } else {
+      w[3 * k] = a;
+      w[3 * k + 1] = b;
+      w[3 * k + 2] = z;
+    }
   }
   const s0 = outputs.Identity_2[0]; // P(class 0 = "Left") under MediaPipe's mirrored assumption
   const right = mirrored ? s0 <= 0.5 : s0 > 0.5;
   return {
-    presence: outputs.Identity_1[0],
+    // a landmark beyond the lens' reach (only in a degenerate crop): not a usable hand
+    presence: mapped && !mapped.every(Number.isFinite) ? 0 : outputs.Identity_1[0],
     handedness: right ? 'right' : 'left',
     handednessScore: Math.max(s0, 1 - s0),
     landmarks,

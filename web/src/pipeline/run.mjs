@@ -18,8 +18,22 @@
 //                         leftName?, rightName? },                 (default hand .npz/.glb, MANO
 //                                                                  .pkl/.npz); names help the
 //                                                                  format check only
-//           focalPx?, fovDeg?            focal length in pixels, or a diagonal field of view;
-//                                        default: DEFAULT_DIAGONAL_FOV_DEG on the diagonal
+//           focalPx?, fovDeg?            focal length in pixels, or a diagonal field of view
+//                                        (through the lens); default: DEFAULT_DIAGONAL_FOV_DEG
+//           camera? ('pinhole')          the lens: 'pinhole', 'opencv:k1,k2,p1,p2[,k3]' or
+//                                        'fisheye:k1,k2,k3,k4' (geometry/lens.hpp), with the
+//                                        focal's intrinsics. Then: the landmark crops are
+//                                        perspective views through the lens, the keypoints are
+//                                        undistorted before the fit, and the SLAM runs in the
+//                                        virtual pinhole camera with the same intrinsics at the
+//                                        SLAM resolution (frames rectified after downscaling,
+//                                        render/rectify.hpp; a fisheye's periphery beyond that
+//                                        camera's field is cut), where the hand masks are
+//                                        rendered too; its poses are the real camera's. The
+//                                        focal refinement refines that virtual camera's focal,
+//                                        and the lens' fx, fy scale with it (the output
+//                                        intrinsics hold both). A string that does not parse,
+//                                        or a lens that folds inside the image, throws
 //           refineFocal? (true)          let the SLAM's final bundle adjustment refine the focal
 //                                        (a profile over log f with a prior toward the given or
 //                                        default focal; declined when the motion does not
@@ -37,7 +51,8 @@
 //                                        web/src/depth_model.mjs), run on the SLAM keyframes,
 //                        | { predict: async (frameIndex, rgb, width, height) => Float32Array }
 //                                        any other source of metric depth (metres, NaN unknown)
-//                                        at the SLAM resolution (benchmarks: ground truth)
+//                                        at the SLAM resolution (benchmarks: ground truth); with
+//                                        a lens, of the rectified frame it is given
 //           threads?                     onnxruntime's threads (ort.env.wasm.numThreads, set here
 //                                        if given; only effective before its first session)
 //           slamMaxSide? (640)           the SLAM and hand masks run on frames downscaled to
@@ -69,9 +84,10 @@
 // { version: 1, width, height, fps, frameCount,
 //   modelKind, threads,
 //   intrinsics: { fx, fy, cx, cy (the ones used for the output: refined when refined is true),
+//                 lens (the camera model's lens, canonical: 'pinhole', 'opencv:...', 'fisheye:...'),
 //                 focalSource: 'user-focal' | 'user-fov' | 'default-fov' | 'slam' (refined),
 //                 guessSource (the source of the starting focal), guessFx, fovDeg (diagonal, of
-//                 fx), refined: bool, focalStd (relative posterior std, null when not
+//                 fx, through the lens), refined: bool, focalStd (relative posterior std, null when not
 //                 estimated), focalEstimateFx (the SLAM's estimate even when not applied, null
 //                 when none), focalReason (why refined / kept / declined), focalPasses (2: the
 //                 SLAM ran again with the refined focal) },
@@ -91,7 +107,8 @@
 //     camTrans, camRot (T*3)            camera frame (observed frames; NaN elsewhere)
 //     jointsWorld (T*21*3)              the model's 21 keypoints of the world motion
 //     jointsCam (T*21*3)                the fitted keypoints in the camera frame (NaN elsewhere)
-//     keypoints2d (T*21*2)              the detected image keypoints (NaN where not detected)
+//     keypoints2d (T*21*2)              the detected image keypoints (NaN where not detected;
+//                                      image pixels of the video, distorted by its lens)
 //     reprojRmsPx (T), handPoseCols P, betaCols B, model: kind },
 //   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles; the vertices
 //          of frame t: core.HandModel(bytes).forward({rot, handPose, betas, trans} of frame t)),
@@ -99,7 +116,8 @@
 //   stats: { palmRuns, landmarkRuns } (the tracker's; {} with observations) }
 //
 // Stages (timings keys): perception (networks + crops), fit (hand fit per hand), masks (hand
-// silhouettes at the SLAM resolution), slamPrep (downscale + grey), slam (tracking + mapping),
+// silhouettes at the SLAM resolution), slamPrep (downscale + grey, and the rectification with a
+// lens), slam (tracking + mapping),
 // slamFinish (final bundle adjustment), depth (optional), scale, world (camera -> world),
 // infill, joints (forward pass of the world motion).
 
@@ -147,6 +165,35 @@ export function defaultIntrinsics(width, height, { focalPx, fovDeg } = {}) {
   }
   const fovOut = (360 / Math.PI) * Math.atan(halfDiag / f);
   return { fx: f, fy: f, cx: (width - 1) / 2, cy: (height - 1) / 2, focalSource, fovDeg: fovOut, refined: false };
+}
+
+/**
+ * The camera model of a width x height video: defaultIntrinsics plus `lens`, the canonical lens
+ * string (options.camera, default 'pinhole'; a lens without distortion becomes 'pinhole'). With a
+ * lens and no focalPx the field of view (fovDeg or the default) is measured through the lens
+ * (CameraModel::fromFov), and fovDeg reports the diagonal field through it. Throws an Error
+ * naming the string and the core's reason for a lens that does not parse, a coefficient that is
+ * not finite, or a lens that folds inside the image.
+ */
+export function cameraIntrinsics(core, width, height, { focalPx, fovDeg, camera } = {}) {
+  const intr = defaultIntrinsics(width, height, { focalPx, fovDeg });
+  const spec = camera ?? 'pinhole';
+  if (typeof spec !== 'string') throw new Error('the camera model must be a lens string (pinhole, opencv:k1,k2,p1,p2[,k3] or fisheye:k1,k2,k3,k4)');
+  let lens;
+  try {
+    lens = core.parseLens(spec);
+    if (lens !== 'pinhole' && intr.focalSource !== 'user-focal') {
+      const c = core.cameraFromFov(width, height, lens, fovDeg ?? DEFAULT_DIAGONAL_FOV_DEG);
+      Object.assign(intr, { fx: c.fx, fy: c.fy });
+    }
+    const d = core.describeCamera([intr.fx, intr.fy, intr.cx, intr.cy], width, height, lens);
+    if (d.pinhole) lens = 'pinhole';
+    else intr.fovDeg = 2 * d.maxFieldAngleDeg;
+  } catch (e) {
+    throw new Error(`the camera model '${spec}': ${e.message}`);
+  }
+  intr.lens = lens;
+  return intr;
 }
 
 /** The SLAM's frame size: the long side at most maxSide, aspect kept, integer pixels. */
@@ -274,7 +321,10 @@ export async function runPipeline(source, options, hooks = {}) {
   const warnings = [];
   const timings = {};
   const addTime = (k, ms) => { timings[k] = (timings[k] ?? 0) + ms; };
-  const intr = defaultIntrinsics(width, height, { focalPx: options.focalPx, fovDeg: options.fovDeg });
+  // The camera model (the core parses and checks the lens; a pinhole lens changes nothing below).
+  const intr = cameraIntrinsics(core, width, height, options);
+  const lens = intr.lens;
+  const withLens = lens !== 'pinhole';
   const K = [intr.fx, intr.fy, intr.cx, intr.cy];
   const ss = slamSize(width, height, options.slamMaxSide ?? 640);
   const sx = ss.width / width;
@@ -304,6 +354,32 @@ export async function runPipeline(source, options, hooks = {}) {
     }
     const fitters = { left: new core.HandFitter(models.left), right: new core.HandFitter(models.right) };
     owned.push(fitters.left, fitters.right);
+    // With a lens: perspective landmark crops through it (full resolution), and the SLAM frames
+    // rectified to the virtual pinhole camera (SLAM resolution).
+    let lensCamera = null;
+    let rectifier = null;
+    if (withLens) {
+      lensCamera = new core.LensCamera(K, width, height, lens);
+      owned.push(lensCamera);
+      rectifier = new core.Rectifier(Ks, ss.width, ss.height, lens);
+      owned.push(rectifier);
+      if (intr.focalSource !== 'user-focal') {
+        warnings.push(`a lens model (${lens}) without a focal length: the focal comes from a ${options.fovDeg ?? DEFAULT_DIAGONAL_FOV_DEG} degree field of view through the lens; calibrated coefficients belong with their calibration's focal (give it)`);
+      }
+    }
+    /** Keypoints for the fit: through the lens, undistorted to the virtual pinhole camera of K
+     *  (those beyond the lens' reach get confidence 0). */
+    const fitInput = (kp2, Kfit) => {
+      if (!withLens) return { kp: kp2, conf: null };
+      const u = core.undistortPoints(Kfit, lens, kp2);
+      const conf = new Float64Array(NUM_KP);
+      for (let k = 0; k < NUM_KP; ++k) {
+        if (Number.isFinite(u[2 * k]) && Number.isFinite(u[2 * k + 1])) conf[k] = 1;
+        else { u[2 * k] = 0; u[2 * k + 1] = 0; }
+      }
+      return { kp: u, conf };
+    };
+    const lensCrops = lensCamera ? { cropMap: (roi, n) => lensCamera.cropMap(roi, n, n), cropToImage: (roi, uv) => lensCamera.cropToImage(roi, uv) } : null;
     const P = { left: 3 * (models.left.numJoints() - 1), right: 3 * (models.right.numJoints() - 1) };
     const B = { left: models.left.numBetas(), right: models.right.numBetas() };
     if (options.threads && options.ort && options.ort.env && options.ort.env.wasm && !options.models?.palmSession) {
@@ -316,12 +392,12 @@ export async function runPipeline(source, options, hooks = {}) {
       const detectGap = options.detectGap ?? PIPELINE_DETECT_GAP;
       const minPresence = options.minPresence ?? PIPELINE_MIN_PRESENCE;
       if (m.palmSession && m.landmarkSession) {
-        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence });
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence, lens: lensCrops });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence, lens: lensCrops });
       }
     }
     if (options.depthModel && typeof options.depthModel.predict === 'function') {
@@ -385,7 +461,8 @@ export async function runPipeline(source, options, hooks = {}) {
         prevWrist[side] = [kp2[0], kp2[1]];
         let fit = null;
         try {
-          fit = fitters[side].fit(kp2, null, kp3, null, K, width, height);
+          const fi = fitInput(kp2, K);
+          fit = fitters[side].fit(fi.kp, fi.conf, kp3, null, K, width, height);
         } catch (e) {
           fitFailures += 1;
           fitters[side].reset();
@@ -409,22 +486,32 @@ export async function runPipeline(source, options, hooks = {}) {
       addTime('masks', now() - t1);
       // --- SLAM ---
       t1 = now();
-      // at the frame's own size the core converts to grey itself
-      const slamFrame = ss.width === width && ss.height === height ? rgba : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true);
-      if (keptRgb) keptRgb.push(ss.width === width && ss.height === height && c === 3 ? rgba.slice() : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, false));
+      // at the frame's own size the core converts to grey itself; with a lens the grey frame is
+      // rectified to the virtual pinhole camera, and the part of it the lens does not see joins
+      // the mask
+      let slamFrame = ss.width === width && ss.height === height && !rectifier ? rgba : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true);
+      let slamMask = mask;
+      if (rectifier) {
+        slamFrame = rectifier.grey(slamFrame);
+        slamMask = rectifier.slamMask(mask);
+      }
+      if (keptRgb) {
+        const rgb = ss.width === width && ss.height === height && c === 3 ? rgba.slice() : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, false);
+        keptRgb.push(rectifier ? rectifier.image(rgb, 3) : rgb);
+      }
       if (keptSlam) {
         if (keptSlam.bytes + 2 * ss.width * ss.height > rerunBytes) {
           keptSlam = null; // too long a video for a second SLAM pass: the focal is refined in the final BA only
         } else {
           const g = slamFrame === rgba ? core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true) : slamFrame;
           keptSlam.frames.push(g);
-          keptSlam.masks.push(mask);
-          keptSlam.bytes += g.length + (mask ? mask.length : 0);
+          keptSlam.masks.push(slamMask);
+          keptSlam.bytes += g.length + (slamMask ? slamMask.length : 0);
         }
       }
       addTime('slamPrep', now() - t1);
       t1 = now();
-      info.slamStatus = slam.process(slamFrame, mask);
+      info.slamStatus = slam.process(slamFrame, slamMask);
       addTime('slam', now() - t1);
       T += 1;
       info.ms = now() - tf;
@@ -481,7 +568,8 @@ export async function runPipeline(source, options, hooks = {}) {
       intrOut.fy = fr.fy / sy;
       intrOut.refined = true;
       intrOut.focalSource = 'slam';
-      intrOut.fovDeg = (2 * Math.atan(0.5 * Math.hypot(width, height) / intrOut.fx) * 180) / Math.PI;
+      intrOut.fovDeg = withLens ? 2 * core.describeCamera([intrOut.fx, intrOut.fy, intr.cx, intr.cy], width, height, lens).maxFieldAngleDeg
+        : (2 * Math.atan(0.5 * Math.hypot(width, height) / intrOut.fx) * 180) / Math.PI;
       t1 = now();
       const K2 = [intrOut.fx, intrOut.fy, intr.cx, intr.cy];
       for (const side of ['left', 'right']) {
@@ -491,7 +579,9 @@ export async function runPipeline(source, options, hooks = {}) {
           if (!f) { if (prevOk) fitters[side].reset(); prevOk = false; continue; }
           let fit = null;
           try {
-            fit = fitters[side].fit(f.kp2, null, f.kp3, null, K2, width, height);
+            // through a lens: the lens' fx, fy scale with the refined virtual focal
+            const fi = fitInput(f.kp2, K2);
+            fit = fitters[side].fit(fi.kp, fi.conf, f.kp3, null, K2, width, height);
           } catch (e) {
             fitters[side].reset();
           }
