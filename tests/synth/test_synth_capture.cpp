@@ -628,3 +628,24 @@ TEST_CASE("capture: sequence errors name the setting", "[synth]") {
   o.capture.fovDeg = 120;
   CHECK(errorOf([&] { make(o); }).find("folds") != std::string::npos);
 }
+
+// Hidden (run with `test_synth "[.hash]"`): FNV-1a hashes of a few frames of every capture
+// profile, to compare the native build with the WebAssembly one.
+TEST_CASE("capture: frame hashes for cross-platform comparison", "[.hash]") {
+  using namespace capture_test;
+  const Hands<double>& h = syntheticHands<double>();
+  for (const hs::CaptureProfile& p : hs::captureProfiles()) {
+    hs::SynthOptions o = smallOptions(80, 24);
+    o.capture = p.options;
+    hs::SynthSequence<double> s(hs::findSynthPreset("fast_turns"), 77, h.left, h.right, o);
+    hs::SynthFrame<double> fr;
+    std::uint64_t img = 1469598103934665603ULL;
+    for (int i = 0; i < s.numFrames(); i += 6) {
+      s.renderFrame(i, fr);
+      for (const std::vector<unsigned char>* d : {&fr.images.rgb.data, &fr.images.mask.data}) {
+        for (unsigned char b : *d) img = (img ^ b) * 1099511628211ULL;
+      }
+    }
+    std::printf("hash capture %-12s images %016llx\n", p.name.c_str(), static_cast<unsigned long long>(img));
+  }
+}
