@@ -42,7 +42,8 @@ TEST_CASE("downscaleBox: every output pixel is the mean of its source pixels (br
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> U(0, 255);
   const int cases[][5] = {{12, 9, 4, 3, 3}, {10, 7, 4, 3, 4}, {7, 5, 7, 5, 3}, {33, 17, 10, 6, 1},
-                          {1920, 8, 640, 3, 4}, {13, 11, 1, 1, 3}, {640, 480, 639, 479, 3}};
+                          {1920, 8, 640, 3, 4}, {13, 11, 1, 1, 3}, {640, 480, 639, 479, 3},
+                          {9, 6, 9, 6, 4}, {5, 4, 5, 4, 1}};  // 1:1 too (a plain per-pixel conversion)
   for (const auto& cs : cases) {
     const int sw = cs[0], sh = cs[1], dw = cs[2], dh = cs[3], c = cs[4];
     std::vector<std::uint8_t> src(static_cast<std::size_t>(sw) * sh * c);

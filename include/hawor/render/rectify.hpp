@@ -78,6 +78,10 @@ class RectifyMap {
     const PinholeCamera<Scalar>& s = source_.intrinsics;
     identity_ = source_.lens.isPinhole() && s.fx == target.fx && s.fy == target.fy && s.cx == target.cx &&
                 s.cy == target.cy && s.width == target.width && s.height == target.height;
+    if (!identity_ && (s.width < 2 || s.height < 2)) {
+      throw Error("RectifyMap: the source image must be at least 2x2 pixels, not " + std::to_string(s.width) + "x" +
+                  std::to_string(s.height));
+    }
     if (!identity_) build();
   }
 
@@ -100,7 +104,7 @@ class RectifyMap {
       return true;
     }
     const std::size_t i = index(x, y);
-    if (base_[i] == kOutside) return false;
+    if (taps_[i].base == kOutside) return false;
     uv = Vec2<Scalar>(srcX_[i], srcY_[i]);
     return true;
   }
@@ -117,26 +121,11 @@ class RectifyMap {
       std::memcpy(dst, src, n * static_cast<std::size_t>(channels));
       return;
     }
-    const int W = source_.intrinsics.width;
-    constexpr std::int32_t one = std::int32_t(1) << kWeightBits;
-    constexpr std::int32_t half = std::int32_t(1) << (2 * kWeightBits - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      std::uint8_t* o = dst + i * static_cast<std::size_t>(channels);
-      const std::int32_t b = base_[i];
-      if (b == kOutside) {
-        for (int c = 0; c < channels; ++c) o[c] = 0;
-        continue;
-      }
-      const std::int32_t wx = wx_[i], wy = wy_[i];
-      const std::size_t sx = static_cast<std::size_t>(step_[i] & 1) * static_cast<std::size_t>(channels);
-      const std::size_t sy = static_cast<std::size_t>(step_[i] >> 1) * static_cast<std::size_t>(W) *
-                             static_cast<std::size_t>(channels);
-      const std::uint8_t* p = src + static_cast<std::size_t>(b) * static_cast<std::size_t>(channels);
-      for (int c = 0; c < channels; ++c) {
-        const std::int32_t top = p[c] * (one - wx) + p[c + sx] * wx;
-        const std::int32_t bot = p[c + sy] * (one - wx) + p[c + sy + sx] * wx;
-        o[c] = static_cast<std::uint8_t>((top * (one - wy) + bot * wy + half) >> (2 * kWeightBits));
-      }
+    switch (channels) {
+      case 1: bilinear<1>(src, dst); break;
+      case 3: bilinear<3>(src, dst); break;
+      case 4: bilinear<4>(src, dst); break;
+      default: bilinear<2>(src, dst); break;
     }
   }
 
@@ -222,6 +211,31 @@ class RectifyMap {
     }
   }
 
+  // The four taps of every inside pixel are base, base + 1, base + W, base + W + 1 (pixels): a
+  // neighbour clamped onto its partner is folded into the weights when the map is built.
+  template <int C>
+  void bilinear(const std::uint8_t* src, std::uint8_t* dst) const {
+    constexpr std::int32_t one = std::int32_t(1) << kWeightBits;
+    constexpr std::int32_t half = std::int32_t(1) << (2 * kWeightBits - 1);
+    const std::size_t n = targetPixels();
+    const std::size_t sy = static_cast<std::size_t>(source_.intrinsics.width) * C;
+    const Tap* tap = taps_.data();
+    for (std::size_t i = 0; i < n; ++i, dst += C) {
+      const Tap t = tap[i];
+      if (t.base == kOutside) {
+        for (int c = 0; c < C; ++c) dst[c] = 0;
+        continue;
+      }
+      const std::int32_t wx = t.wx, wy = t.wy;
+      const std::uint8_t* p = src + static_cast<std::size_t>(t.base) * C;
+      for (int c = 0; c < C; ++c) {
+        const std::int32_t top = p[c] * (one - wx) + p[c + C] * wx;
+        const std::int32_t bot = p[c + sy] * (one - wx) + p[c + sy + C] * wx;
+        dst[c] = static_cast<std::uint8_t>((top * (one - wy) + bot * wy + half) >> (2 * kWeightBits));
+      }
+    }
+  }
+
   void build() {
     using std::atan2;
     using std::floor;
@@ -233,11 +247,8 @@ class RectifyMap {
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     srcX_.assign(n, nan);
     srcY_.assign(n, nan);
-    base_.assign(n, kOutside);
+    taps_.assign(n, Tap{kOutside, 0, 0});
     nearest_.assign(n, kOutside);
-    wx_.assign(n, 0);
-    wy_.assign(n, 0);
-    step_.assign(n, 0);
     outside_.resize(t.width, t.height, 1, 0);
     // The lens means nothing beyond its fold angle (Lens::inDomain, with the angle found once).
     const Scalar fold = source_.lens.maxMonotonicAngle();
@@ -264,15 +275,25 @@ class RectifyMap {
         }
         srcX_[i] = uv(0);
         srcY_[i] = uv(1);
-        // Bilinear: the neighbours ⌊u⌋ and ⌊u⌋ + 1, each clamped to the image.
+        // Bilinear: the neighbours ⌊u⌋ and ⌊u⌋ + 1, each clamped to the image. Where both
+        // clamp onto one pixel (u < 0 or u ≥ W − 1) that pixel gets the whole weight, as the
+        // left (x = 0) or the right (x = W − 1) tap, so that every tap lies in the image.
         const Scalar fu = floor(uv(0)), fv = floor(uv(1));
-        const int x0 = static_cast<int>(fu), y0 = static_cast<int>(fv);
-        const int x0c = std::clamp(x0, 0, W - 1), x1c = std::clamp(x0 + 1, 0, W - 1);
-        const int y0c = std::clamp(y0, 0, H - 1), y1c = std::clamp(y0 + 1, 0, H - 1);
-        base_[i] = static_cast<std::int32_t>(static_cast<std::int64_t>(y0c) * W + x0c);
-        step_[i] = static_cast<std::uint8_t>((x1c - x0c) | ((y1c - y0c) << 1));
-        wx_[i] = static_cast<std::uint16_t>(std::lround(static_cast<double>((uv(0) - fu) * one)));
-        wy_[i] = static_cast<std::uint16_t>(std::lround(static_cast<double>((uv(1) - fv) * one)));
+        const auto axis = [one](Scalar u, Scalar fl, int size, int& first, std::uint16_t& w) {  // size >= 2
+          const int x0 = static_cast<int>(fl);
+          if (x0 < 0) {
+            first = 0, w = 0;
+          } else if (x0 >= size - 1) {
+            first = size - 2, w = static_cast<std::uint16_t>(one);
+          } else {
+            first = x0, w = static_cast<std::uint16_t>(std::lround(static_cast<double>((u - fl) * one)));
+          }
+        };
+        int xf = 0, yf = 0;
+        std::uint16_t wx = 0, wy = 0;
+        axis(uv(0), fu, W, xf, wx);
+        axis(uv(1), fv, H, yf, wy);
+        taps_[i] = Tap{static_cast<std::int32_t>(static_cast<std::int64_t>(yf) * W + xf), wx, wy};
         // Nearest: the pixel whose centre is closest (⌊u + ½⌋), clamped (u = W − ½ gives W).
         const int xn = std::min(static_cast<int>(floor(uv(0) + Scalar(0.5))), W - 1);
         const int yn = std::min(static_cast<int>(floor(uv(1) + Scalar(0.5))), H - 1);
@@ -317,10 +338,12 @@ class RectifyMap {
   bool identity_ = true;
   std::size_t numOutside_ = 0;
   std::vector<Scalar> srcX_, srcY_;          ///< source position per target pixel (NaN outside)
-  std::vector<std::int32_t> base_;           ///< top-left bilinear neighbour (source pixel index) or kOutside
+  struct Tap {
+    std::int32_t base;     ///< top-left tap (source pixel index) or kOutside
+    std::uint16_t wx, wy;  ///< weights of the right / lower taps, 11-bit fixed point
+  };
+  std::vector<Tap> taps_;
   std::vector<std::int32_t> nearest_;        ///< nearest source pixel index or kOutside
-  std::vector<std::uint16_t> wx_, wy_;       ///< bilinear weights of the right / lower neighbours, 11-bit
-  std::vector<std::uint8_t> step_;           ///< bit 0: right neighbour differs; bit 1: lower neighbour differs
   ImageU8 outside_;                          ///< 1 outside
   ImageU8 border_;                           ///< 255 in the outside region grown by borderPx (empty: none)
 };
