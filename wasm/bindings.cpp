@@ -50,7 +50,10 @@
 //   new LensCamera(intrinsics, width, height, lens) (render/lens_crop.hpp): cropMap({cx, cy, w, h,
 //       rotation}, outW, outH) -> {map: Float32Array(2*outW*outH) source pixels (NaN outside),
 //       rotation: Float64Array(9) row-major (virtual camera -> camera), focal}; cropToImage(roi,
-//       Float64Array(2N) crop-normalised (u, v)) -> Float64Array(2N) source pixels (NaN outside).
+//       Float64Array(2N) crop-normalised (u, v)) -> Float64Array(2N) source pixels (NaN outside);
+//       letterboxMap(outW, outH) -> Float32Array(2*outW*outH): the letterboxed rectified frame
+//       (the virtual pinhole camera with the same intrinsics) through the lens, for a detector
+//       that looks at the whole frame; virtualToImage(Float64Array(2N) pixels of that camera) -> Float64Array(2N).
 //   infillHand(motion, T, method 'spline'|'lerp'|'last', model|null) -> motion & {filled}
 //   cameraToWorld(motion, T, rotations, translations, scale, model|null) -> motion
 //   motion objects: {rot (3T), trans (3T), handPose (3KT), betas (BT), valid: Uint8Array(T)}.
@@ -672,6 +675,29 @@ class LensCamera {
       return o;
     });
   }
+  val letterboxMap(int outW, int outH) {
+    return guard("LensCamera.letterboxMap", [&] {
+      if (outW <= 0 || outH <= 0 || outW > 4096 || outH > 4096) throw hawor::Error("crop size must be in 1..4096");
+      std::vector<float> map(2 * static_cast<size_t>(outW) * static_cast<size_t>(outH));
+      hawor::rectifiedLetterboxMap(cam_, outW, outH, map.data());
+      return toTyped(map.data(), map.size(), "Float32Array");
+    });
+  }
+  val virtualToImage(const val& points) {
+    return guard("LensCamera.virtualToImage", [&] {
+      std::vector<double> p = fromTyped<double>(points);
+      if (p.size() % 2 != 0) throw hawor::Error("points: length " + std::to_string(p.size()) + " is not 2N");
+      for (size_t i = 0; i < p.size(); i += 2) {
+        hawor::Vec2<double> px;
+        if (hawor::virtualToSource(cam_, hawor::Vec2<double>(p[i], p[i + 1]), px)) {
+          p[i] = px(0), p[i + 1] = px(1);
+        } else {
+          p[i] = p[i + 1] = std::nan("");
+        }
+      }
+      return f64(p.data(), p.size());
+    });
+  }
   val cropToImage(const val& roi, const val& points) {
     return guard("LensCamera.cropToImage", [&] {
       const hawor::LensCrop<double> crop(cam_, roiFrom(roi));
@@ -999,7 +1025,9 @@ EMSCRIPTEN_BINDINGS(hawor_core) {
   emscripten::class_<LensCamera>("LensCamera")
       .constructor(&newLensCamera, allow_raw_pointers())
       .function("cropMap", &LensCamera::cropMap)
-      .function("cropToImage", &LensCamera::cropToImage);
+      .function("cropToImage", &LensCamera::cropToImage)
+      .function("letterboxMap", &LensCamera::letterboxMap)
+      .function("virtualToImage", &LensCamera::virtualToImage);
   emscripten::function("parseLens", &parseLens);
   emscripten::function("describeCamera", &describeCamera);
   emscripten::function("cameraFromFov", &cameraFromFov);

@@ -426,3 +426,47 @@ TEMPLATE_TEST_CASE("CameraModel::fromFov: the diagonal field of view through the
   CHECK_THROWS_WITH(CameraModel<S>::fromFov(640, 480, Lens<S>::pinhole(), S(200)), Catch::Contains("field of view"));
   CHECK_THROWS_WITH(CameraModel<S>::fromFov(640, 480, Lens<S>::radTan(S(-0.6), S(0.05), 0, 0, 0), S(120)), Catch::Contains("folds"));
 }
+
+TEMPLATE_TEST_CASE("rectifiedLetterboxMap and virtualToSource: the rectified frame's letterbox through the lens", "[lens_crop]",
+                   float, double) {
+  using S = TestType;
+  const double tol = std::is_same<S, float>::value ? 2e-2 : 1e-9;
+  for (const CameraModel<double>& camD : cameras()) {
+    const CameraModel<S> cam = camD.template cast<S>();
+    const RectifyMap<S> rect(cam);
+    const int N = 48;
+    std::vector<S> map(2 * N * N);
+    hawor::rectifiedLetterboxMap(cam, N, N, map.data());
+    const double side = 160, cx = 79.5, cy = 59.5;  // the 160 × 120 cameras' letterbox
+    std::size_t inside = 0;
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        const double x = cx + side * ((i + 0.5) / N - 0.5), y = cy + side * ((j + 0.5) / N - 0.5);
+        const hawor::Vec3<double> ray((x - camD.intrinsics.cx) / camD.intrinsics.fx, (y - camD.intrinsics.cy) / camD.intrinsics.fy, 1.0);
+        const std::size_t o = 2 * (static_cast<std::size_t>(j) * N + i);
+        INFO(camD.lens.toString() << " (" << i << ", " << j << ")");
+        if (!camD.lens.inDomain(ray)) {
+          CHECK(std::isnan(double(map[o])));
+          continue;
+        }
+        const hawor::Vec2<double> ref = camD.project(ray);
+        CHECK(std::abs(double(map[o]) - ref(0)) < tol * std::max(1.0, std::abs(ref(0))));
+        CHECK(std::abs(double(map[o + 1]) - ref(1)) < tol * std::max(1.0, std::abs(ref(1))));
+        // inside the rectified frame it is the rectifier's own source position
+        const int xi = int(std::lround(x)), yi = int(std::lround(y));
+        if (std::abs(x - xi) < 1e-9 && std::abs(y - yi) < 1e-9 && xi >= 0 && yi >= 0 && xi < 160 && yi < 120) {
+          hawor::Vec2<S> uv;
+          if (rect.sourcePixel(xi, yi, uv)) {
+            ++inside;
+            CHECK((uv.template cast<double>() - ref).norm() < 1e3 * tol);
+          }
+        }
+        hawor::Vec2<S> px;
+        REQUIRE(hawor::virtualToSource(cam, hawor::Vec2<S>(S(x), S(y)), px));
+        CHECK((px.template cast<double>() - ref).norm() < 1e3 * tol);
+      }
+    (void)inside;
+  }
+  std::vector<float> m(8);
+  CHECK_THROWS_WITH(hawor::rectifiedLetterboxMap(cameras()[0], 0, 2, m.data()), Catch::Contains("positive"));
+}

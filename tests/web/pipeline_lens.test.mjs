@@ -191,7 +191,7 @@ test('core.Rectifier: grey (bilinear), mask (nearest) and the SLAM mask against 
   assert.throws(() => new core.Rectifier([100, 100, 79.5, 59.5], W, H, 'opencv:-0.9,0,0,0'), /folds|beyond what lens/);
 });
 
-test('core.LensCamera and the perception crop: perspective views through the lens, landmarks back through the same map', { skip: coreSkip() }, async () => {
+test('core.LensCamera and the perception crop: perspective views through the lens, landmarks back through the same map, the rectified frame\'s letterbox', { skip: coreSkip() }, async () => {
   const core = await loadCore();
   const K = [313.6876484765642, 313.6876484765642, 319.5, 239.5];
   const lc = new core.LensCamera(K, 640, 480, FISHEYE);
@@ -225,6 +225,22 @@ test('core.LensCamera and the perception crop: perspective views through the len
       assert.ok(Math.abs(back[2 * p] - ref[0]) < 1e-6 && Math.abs(back[2 * p + 1] - ref[1]) < 1e-6);
       assert.ok(Math.abs(map[2 * p] - ref[0]) < 1e-3 && Math.abs(map[2 * p + 1] - ref[1]) < 1e-3);
     }
+    // a whole-frame detector's view: the rectified frame's letterbox through the lens, and back
+    const L = 16;
+    const lb = lc.letterboxMap(L, L);
+    const virt = new Float64Array(2 * L * L);
+    for (let j = 0; j < L; ++j) {
+      for (let i = 0; i < L; ++i) {
+        const x = 319.5 + 640 * ((i + 0.5) / L - 0.5);
+        const y = 239.5 + 640 * ((j + 0.5) / L - 0.5);
+        virt[2 * (j * L + i)] = x;
+        virt[2 * (j * L + i) + 1] = y;
+        const ref = pix(K, distort('fisheye', FISH_K, [(x - K[2]) / K[0], (y - K[3]) / K[1], 1]));
+        assert.ok(Math.abs(lb[2 * (j * L + i)] - ref[0]) < 1e-3 && Math.abs(lb[2 * (j * L + i) + 1] - ref[1]) < 1e-3, `(${i}, ${j})`);
+      }
+    }
+    const back2 = lc.virtualToImage(virt);
+    for (let p = 0; p < 2 * L * L; ++p) assert.ok(Math.abs(back2[p] - lb[p]) < 1e-3);
     assert.throws(() => lc.cropMap({ cx: 1e8, cy: 0, w: 10, h: 10, rotation: 0 }, 4, 4), /beyond what lens/);
     assert.throws(() => lc.cropMap({ cx: 1, cy: 0, w: 10, rotation: 0 }, 4, 4), /roi\.h/);
   } finally { lc.delete(); }

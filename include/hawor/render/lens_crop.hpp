@@ -21,9 +21,14 @@
 //
 // Landmarks found in the crop map back through toImage (the same map); directions found in the
 // crop's axes (world landmarks) map to the camera frame by rotation()·Rot_z(rotation).
+//
+// For a detector that looks at the whole frame (the palm detector), rectifiedLetterboxMap gives
+// the letterboxed view of the virtual pinhole camera with the camera's own intrinsics (the
+// rectified frame), and virtualToSource maps its detections back to source pixels.
 // Thread-safety: const after construction.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -132,5 +137,44 @@ class LensCrop {
   Mat3<Scalar> R_ = Mat3<Scalar>::Identity();
   Scalar f_ = Scalar(1), c_ = Scalar(1), s_ = Scalar(0);
 };
+
+/// The source pixel seen by pixel p of the virtual pinhole camera with the camera's own
+/// intrinsics (the rectified frame of rectify.hpp's default target): p's ray through the lens.
+/// False (px untouched) beyond the lens' domain.
+template <typename Scalar>
+bool virtualToSource(const CameraModel<Scalar>& camera, const Vec2<Scalar>& p, Vec2<Scalar>& px) {
+  const Vec3<Scalar> ray = camera.intrinsics.ray(p);
+  if (!camera.lens.inDomain(ray)) return false;
+  px = camera.project(ray);
+  return std::isfinite(px(0)) && std::isfinite(px(1));
+}
+
+/// The letterboxed whole view of that virtual pinhole camera as an outW × outH sampling map into
+/// the source image (the palm detector's input): the square of side max(W, H) centred on the
+/// image centre ((W − 1)/2, (H − 1)/2), crop pixel (i, j) at centre + side·((i + ½)/outW − ½,
+/// (j + ½)/outH − ½) (web/src/perception/geometry.mjs' letterboxRoi); each such virtual pixel
+/// through virtualToSource, NaN where it fails (read as black, as the letterbox bars are).
+template <typename Scalar, typename Out>
+void rectifiedLetterboxMap(const CameraModel<Scalar>& camera, int outW, int outH, Out* xy) {
+  if (outW <= 0 || outH <= 0) throw Error("rectifiedLetterboxMap: the crop size must be positive");
+  const PinholeCamera<Scalar>& k = camera.intrinsics;
+  const Scalar side = Scalar(std::max(k.width, k.height));
+  const Scalar cx = (Scalar(k.width) - Scalar(1)) / Scalar(2), cy = (Scalar(k.height) - Scalar(1)) / Scalar(2);
+  const Out nan = std::numeric_limits<Out>::quiet_NaN();
+  for (int j = 0; j < outH; ++j) {
+    const Scalar y = cy + side * ((Scalar(j) + Scalar(0.5)) / Scalar(outH) - Scalar(0.5));
+    for (int i = 0; i < outW; ++i) {
+      const Scalar x = cx + side * ((Scalar(i) + Scalar(0.5)) / Scalar(outW) - Scalar(0.5));
+      Out* o = xy + 2 * (static_cast<std::size_t>(j) * static_cast<std::size_t>(outW) + static_cast<std::size_t>(i));
+      Vec2<Scalar> px;
+      if (virtualToSource(camera, Vec2<Scalar>(x, y), px)) {
+        o[0] = static_cast<Out>(px(0));
+        o[1] = static_cast<Out>(px(1));
+      } else {
+        o[0] = o[1] = nan;
+      }
+    }
+  }
+}
 
 }  // namespace hawor
