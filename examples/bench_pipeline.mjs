@@ -5,6 +5,7 @@
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
 //        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
+//        [--tracker JSON]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -24,7 +25,8 @@
 // FOV it implies, so the pipeline treats it as a FOV guess); --refine-focal on,off: with and
 // without the SLAM's focal refinement (a second table: refined focal, its error and ATE).
 // --hand-smooth K: runPipeline's handScaleSmooth (moving average of the camera-frame wrists before
-// the hand-anchored scale). Each row also has handDepth per hand: the median ratio of the fitted
+// the hand-anchored scale). --tracker '{"motion":false}': HandTracker options over the pipeline's
+// (runPipeline's options.tracker; '{"candidateScore":0.5,...}' for MediaPipe's policy). Each row also has handDepth per hand: the median ratio of the fitted
 // camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
 // fitted and the true depth (what the hand-anchored scale has to work with).
 // Timing: median over sequences of each stage's ms per frame.
@@ -64,6 +66,7 @@ function parse(argv) {
     else if (a === '--core') o.core = v();
     else if (a === '--json') o.json = v();
     else if (a === '--mask-dilate') o.maskDilate = Number(v());
+    else if (a === '--tracker') o.tracker = JSON.parse(v());
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
     else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
@@ -250,6 +253,7 @@ async function main() {
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
+          ...(o.tracker ? { tracker: o.tracker } : {}),
           ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * seq.fx)) * 180) / Math.PI } : { focalPx: seq.fx }) };
         if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
         if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);

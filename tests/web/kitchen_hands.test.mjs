@@ -46,9 +46,10 @@ test('kitchen clip, headless run: a finite camera path of a few metres, scaled b
     const g = r.scale.ground ?? {};
     const msg = JSON.stringify({ path, scale: r.scale.scale, method: r.scale.method, ground: { ...g, up: undefined } });
     assert.ok(g.ok, `the ground cue found no floor: ${msg}`);
-    // Seen with the floor, the table top or counter is 0.6-1.1 m high; seen alone (ambiguous), the
-    // hands chose between the floor and the table-top readings.
-    if (!g.ambiguous) assert.ok(g.surfaceHeight > 0.6 && g.surfaceHeight < 1.1, `work surface: ${msg}`);
+    // Seen with the floor, the table top or counter is 0.6-1.1 m high, measured in units of the
+    // 1.6 m eye-height prior (a wearer's eyes are 1.45-1.75 m high: +-10 %, so 0.54-1.21 m); seen
+    // alone (ambiguous), the hands chose between the floor and the table-top readings.
+    if (!g.ambiguous) assert.ok(g.surfaceHeight > 0.6 * 0.9 && g.surfaceHeight < 1.1 * 1.1, `work surface: ${msg}`);
     // Table to sink in 4 s: 1-6 m of head path (walking 0.3-1.5 m/s, plus the turn).
     assert.ok(path > 1 && path < 6, `camera path ${path.toFixed(2)} m: ${msg}`);
   } finally {

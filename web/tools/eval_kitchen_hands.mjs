@@ -19,7 +19,7 @@ import { fileURLToPath } from 'node:url';
 import { defaultModelsDir } from './convert_mediapipe.mjs';
 import { HandTracker } from '../src/perception/hand_tracker.mjs';
 import { probeVideo, decodeFrames } from '../cli.mjs';
-import { assignSides, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE } from '../src/pipeline/run.mjs';
+import { assignSides, sideState, updateSideState, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE, PIPELINE_TRACKER_OPTIONS } from '../src/pipeline/run.mjs';
 
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const defaultVideo = '/work/shared/data/egocentric_kitchen.mp4';
@@ -38,8 +38,8 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
   ort.env.wasm.numThreads = 1;
   ort.env.logLevel = 'error';
   const tracker = await HandTracker.create(ort, join(defaultModelsDir, `palm_detection_${model}.onnx`), join(defaultModelsDir, `hand_landmark_${model}.onnx`),
-    { maxHands: 2, detectGap: PIPELINE_DETECT_GAP, minPresence: PIPELINE_MIN_PRESENCE, ...trackerOptions }); // runPipeline's defaults
-  const prev = { left: null, right: null };
+    { maxHands: 2, detectGap: PIPELINE_DETECT_GAP, minPresence: PIPELINE_MIN_PRESENCE, ...PIPELINE_TRACKER_OPTIONS, ...trackerOptions }); // runPipeline's defaults
+  const prev = sideState();
   const reach = 0.15 * Math.hypot(width, height); // as runPipeline
   const perFrame = [];
   let ms = 0;
@@ -50,10 +50,10 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
     const dets = await tracker.track({ width, height, data, channels: 3 });
     ms += performance.now() - t0;
     const sides = assignSides(dets, prev, reach);
+    updateSideState(prev, sides);
     const rec = {};
     for (const side of ['left', 'right']) {
       const d = sides[side];
-      prev[side] = d ? [d.landmarks[0], d.landmarks[1]] : null;
       rec[side] = d ? [d.landmarks[0] * W / width, d.landmarks[1] * H / height] : null;
     }
     perFrame.push(rec);

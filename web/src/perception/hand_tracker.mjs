@@ -32,6 +32,23 @@ export class HandTracker {
    *                      lens: a camera with a lens, { cropMap(roi, n) -> { map: Float32Array(2n²),
    *                      rotation: (9) }, cropToImage(roi, uv: Float64Array) -> Float64Array }
    *                      (the core's LensCamera); null or absent: affine crops (a pinhole camera)
+   *                    The policy beyond MediaPipe's (defaults: off, MediaPipe's behaviour; the
+   *                    pipeline's settings: run.mjs's PIPELINE_TRACKER_OPTIONS):
+   *                      candidateScore (minPalmScore): a detector-verifier cascade: palm
+   *                      candidates down to this score, the best maxCandidates (maxHands) that do
+   *                      not overlap a hand each verified by the landmark network on its crop;
+   *                      one below minPalmScore needs candidatePresence (minPresence) there
+   *                      palmPrefilter (0): the detector's letterbox sampled with a box of this
+   *                      many sample spacings (prefilter.mjs; 0: bilinear points)
+   *                      redetectOnLoss (false): the detector also runs on a frame where a track
+   *                      was not found (lost, or still coasting), whatever detectGap says
+   *                      motion (false): a track is looked for at its last ROI moved on at its
+   *                      velocity (constant velocity, ROI centre per frame)
+   *                      coast (0): a lost track is looked for again on this many more frames
+   *                      (at its predicted ROI; not reported while lost)
+   *                    Every hand carries its track: { id, pRight (the track's handedness
+   *                    evidence), frames }; a hand found again by the detector on the frame its
+   *                    track was lost, or while that track coasts, keeps the track.
    */
   static async create(ort, palmModel, landmarkModel, options = {}) {
     const so = { graphOptimizationLevel: 'all', ...(options.sessionOptions ?? {}) };
@@ -42,9 +59,9 @@ export class HandTracker {
 
   constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0, lens = null,
     candidateScore = minPalmScore, candidatePresence = minPresence, maxCandidates = maxHands, palmPrefilter = 0, redetectOnLoss = false,
-    motion = false, motionGrow = 0, coast = 0, memory = 0, holdPresence = minPresence, refine = false } = {}) {
+    motion = false, coast = 0 } = {}) {
     Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap, lens });
-    Object.assign(this, { candidateScore, candidatePresence, maxCandidates, palmPrefilter, redetectOnLoss, motion, motionGrow, coast, memory, holdPresence, refine });
+    Object.assign(this, { candidateScore, candidatePresence, maxCandidates, palmPrefilter, redetectOnLoss, motion, coast });
     this.framesWithoutDetect = 0;
     for (const [s, what, n] of [[palmSession, 'palm', 2], [landmarkSession, 'landmark', 4]]) {
       if (s.inputNames.length !== 1 || s.outputNames.length !== n) {
@@ -55,7 +72,6 @@ export class HandTracker {
     this.landmarkInput = new Float32Array(LANDMARK_INPUT_SIZE * LANDMARK_INPUT_SIZE * 3);
     this.tracked = []; // ROIs for the next frame
     this.trackStates = []; // their tracks (identity, handedness evidence, motion), see newTrack
-    this.lostTracks = []; // tracks lost within the last `memory` frames
     this.frame = 0;
     this.nextId = 1;
     this.stats = { palmRuns: 0, landmarkRuns: 0 };
@@ -103,7 +119,6 @@ export class HandTracker {
   reset() {
     this.tracked = [];
     this.trackStates = [];
-    this.lostTracks = [];
   }
 
   /** A new track on `roi`: its id, handedness evidence (sum of the frames' clamped log-odds of
@@ -114,14 +129,11 @@ export class HandTracker {
   }
 
   /** The ROI a track is looked for in on this frame: its last one, moved on at its velocity
-   *  (with `motion`) and enlarged by motionGrow x the distance moved over its width. */
+   *  with `motion` (a hand moving 100 px a frame at 10 fps leaves the ROI of its last position). */
   searchRoi(st) {
     if (!this.motion) return st.roi;
     const gap = this.frame - st.lastFrame;
-    const dx = st.vel[0] * gap;
-    const dy = st.vel[1] * gap;
-    const grow = 1 + Math.min(0.5, (this.motionGrow * Math.hypot(dx, dy)) / st.roi.w);
-    return { ...st.roi, cx: st.roi.cx + dx, cy: st.roi.cy + dy, w: st.roi.w * grow, h: st.roi.h * grow };
+    return { ...st.roi, cx: st.roi.cx + st.vel[0] * gap, cy: st.roi.cy + st.vel[1] * gap };
   }
 
   /** Hand h was found on this frame by track st: its next ROI, velocity and handedness. */
@@ -139,17 +151,18 @@ export class HandTracker {
     h.track = { id: st.id, pRight: 1 / (1 + Math.exp(-st.logOdds)), frames: st.frames };
   }
 
-  /** The lost track a new hand (next ROI `roi`) continues: its predicted centre within its ROI
-   *  width of the hand's, the nearest such; removed from the lost tracks. */
-  revive(roi) {
+  /** The track among `lost` (lost on this frame, or coasting) a newly detected hand (next ROI
+   *  `roi`) continues: the nearest whose predicted centre lies within half the larger ROI's
+   *  width (about a hand's length) of the hand's; removed from `lost`. */
+  revive(lost, roi) {
     let best = -1;
     let bestD = Infinity;
-    this.lostTracks.forEach((st, k) => {
+    lost.forEach((st, k) => {
       const gap = this.frame - st.lastFrame;
       const d = Math.hypot(roi.cx - (st.roi.cx + st.vel[0] * gap), roi.cy - (st.roi.cy + st.vel[1] * gap));
-      if (d < Math.max(st.roi.w, roi.w) && d < bestD) { best = k; bestD = d; }
+      if (d < 0.5 * Math.max(st.roi.w, roi.w) && d < bestD) { best = k; bestD = d; }
     });
-    return best < 0 ? null : this.lostTracks.splice(best, 1)[0];
+    return best < 0 ? null : lost.splice(best, 1)[0];
   }
 
   /**
@@ -166,19 +179,29 @@ export class HandTracker {
     const states = this.tracked.map((roi, j) => (this.trackStates[j] && this.trackStates[j].roi === roi ? this.trackStates[j] : this.newTrack(roi)));
     const hands = [];
     const owners = []; // the track of each hand
-    const coasting = [];
-    let lost = 0;
+    const lost = []; // tracks not found on this frame: coasting (looked for again) or ended
+    // one hand seen twice: the bounding boxes of the two views' 21 landmarks overlap by more
+    // than half the smaller one (a track that drifted, or a detection framing the hand at another
+    // scale, can have an IoU below 0.5 with the same hand's other view; the next ROIs, twice the
+    // hand, overlap for two large hands side by side)
+    const extent = (lm) => {
+      let x0 = Infinity; let y0 = Infinity; let x1 = -Infinity; let y1 = -Infinity;
+      for (let k = 0; k < lm.length; k += 3) { x0 = Math.min(x0, lm[k]); x1 = Math.max(x1, lm[k]); y0 = Math.min(y0, lm[k + 1]); y1 = Math.max(y1, lm[k + 1]); }
+      return { x0, y0, x1, y1, area: Math.max(1e-9, (x1 - x0) * (y1 - y0)) };
+    };
     const sameHand = (h) => {
-      const next = box(roiFromLandmarks(h.landmarks));
-      return hands.findIndex((o) => iou(box(roiFromLandmarks(o.landmarks)), next) > 0.5);
+      const a = extent(h.landmarks);
+      return hands.findIndex((o) => {
+        const b = extent(o.landmarks);
+        const inter = Math.max(0, Math.min(a.x1, b.x1) - Math.max(a.x0, b.x0)) * Math.max(0, Math.min(a.y1, b.y1) - Math.max(a.y0, b.y0));
+        return inter > 0.5 * Math.min(a.area, b.area);
+      });
     };
     for (const st of states) {
       const h = await this.landmarks(image, this.searchRoi(st));
-      const held = st.frames >= 2 && h.presence >= this.holdPresence;
-      if (h.presence < this.minPresence && !held) {
-        lost += 1;
+      if (h.presence < this.minPresence) {
         st.misses += 1;
-        (st.misses <= this.coast ? coasting : this.lostTracks).push(st);
+        lost.push(st);
         continue;
       }
       // two tracks that converged on one hand (MediaPipe associates them the same way, IoU > 0.5
@@ -194,7 +217,7 @@ export class HandTracker {
       if (moved(st) < moved(owners[dup])) owners[dup] = st;
       if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
     }
-    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap || (this.redetectOnLoss && lost > 0));
+    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap || (this.redetectOnLoss && lost.length > 0));
     this.framesWithoutDetect = detect ? 0 : this.framesWithoutDetect + 1;
     if (detect) {
       // palm candidates down to candidateScore, each confirmed by the landmark network's presence
@@ -206,31 +229,24 @@ export class HandTracker {
         const roi = roiFromPalm(palm);
         if (hands.some((h) => iou(box(roiFromLandmarks(h.landmarks)), box(roi)) >= 0.5)) continue;
         verified += 1;
-        let h = await this.landmarks(image, roi);
-        const need = palm.score >= this.minPalmScore ? this.minPresence : this.candidatePresence;
-        if (h.presence < need && this.refine && h.presence >= 0.02) {
-          // the palm's ROI frames the hand less well than its landmarks' (the crops the network
-          // tracks with): look again there
-          const h2 = await this.landmarks(image, roiFromLandmarks(h.landmarks));
-          if (h2.presence > h.presence) h = h2;
+        const h = await this.landmarks(image, roi);
+        if (h.presence < (palm.score >= this.minPalmScore ? this.minPresence : this.candidatePresence)) continue;
+        const dup = sameHand(h);
+        if (dup >= 0) {
+          // a hand already found: the more confident view, on its track (a detection re-anchors
+          // a track that drifted)
+          if (h.presence > hands[dup].presence) hands[dup] = { ...h, palm, source: 'detect' };
+          continue;
         }
-        if (h.presence < need || sameHand(h) >= 0) continue;
-        const next = roiFromLandmarks(h.landmarks);
-        let st = null;
-        const k = coasting.findIndex((s) => Math.hypot(next.cx - s.roi.cx, next.cy - s.roi.cy) < Math.max(s.roi.w, next.w));
-        if (k >= 0) st = coasting.splice(k, 1)[0];
-        else st = this.revive(next) ?? this.newTrack(roi);
         hands.push({ ...h, palm, source: 'detect' });
-        owners.push(st);
+        owners.push(this.revive(lost, roiFromLandmarks(h.landmarks)) ?? this.newTrack(roi));
       }
     }
     hands.forEach((h, j) => this.confirm(owners[j], h));
-    // coasting tracks are looked for again on the next frame, while there is room
-    const keep = coasting.slice(0, Math.max(0, this.maxHands - hands.length));
-    this.lostTracks.push(...coasting.slice(keep.length));
-    this.trackStates = [...owners, ...keep];
+    // lost tracks within `coast` misses are looked for again on the next frame, while there is room
+    const coasting = lost.filter((st) => st.misses <= this.coast).slice(0, Math.max(0, this.maxHands - hands.length));
+    this.trackStates = [...owners, ...coasting];
     this.tracked = this.trackStates.map((st) => st.roi);
-    this.lostTracks = this.lostTracks.filter((st) => this.frame - st.lastFrame <= this.memory);
     return hands;
   }
 }

@@ -26,67 +26,54 @@ export function cropBoxFiltered(image, roi, outW, outH = outW, out = new Float32
   if (out.length !== outW * outH * 3) throw new Error(`cropBoxFiltered: output of ${out.length} floats for ${outW}x${outH}x3`);
   if (!(footprint >= 0)) throw new Error(`cropBoxFiltered: footprint ${footprint}`);
   // the taps of one axis: for output index i, the first source pixel and the weights of the
-  // pixels its box overlaps (pixel k covers [k - 0.5, k + 0.5]; outside the image: weight 0)
-  const taps = (c, size, n, N) => {
-    const first = new Int32Array(n);
-    const weights = [];
-    const step = size / n;
+  // `n` pixels from it (pixel k covers [k - 0.5, k + 0.5]; outside the image: weight 0)
+  const taps = (c, size, count, N) => {
+    const step = size / count;
     const half = Math.max(0.5, (footprint * step) / 2);
-    for (let i = 0; i < n; ++i) {
+    const n = Math.ceil(2 * half) + 1;
+    const first = new Int32Array(count);
+    const weights = new Float32Array(count * n);
+    for (let i = 0; i < count; ++i) {
       const mid = c - size / 2 + (i + 0.5) * step;
       const a = mid - half;
       const b = mid + half;
       const k0 = Math.round(a);
-      const k1 = Math.round(b);
-      const w = [];
-      for (let k = k0; k <= k1; ++k) {
-        const overlap = Math.min(b, k + 0.5) - Math.max(a, k - 0.5);
-        w.push(k >= 0 && k < N && overlap > 0 ? overlap / (b - a) : 0);
-      }
       first[i] = k0;
-      weights.push(Float64Array.from(w));
+      for (let q = 0; q < n; ++q) {
+        const k = k0 + q;
+        const overlap = Math.min(b, k + 0.5) - Math.max(a, k - 0.5);
+        weights[i * n + q] = k >= 0 && k < N && overlap > 0 ? overlap / (b - a) : 0;
+      }
     }
-    return { first, weights };
+    return { first, weights, n };
   };
   const tx = taps(roi.cx, roi.w, outW, W);
   const ty = taps(roi.cy, roi.h, outH, H);
-  // rows filtered horizontally once each (a row serves every output row whose box covers it)
-  const rows = new Map();
-  const filteredRow = (y) => {
-    let r = rows.get(y);
-    if (r) return r;
-    r = new Float64Array(outW * 3);
-    const base = y * W;
-    for (let i = 0; i < outW; ++i) {
-      const wx = tx.weights[i];
-      const x0 = tx.first[i];
-      let R = 0;
-      let G = 0;
-      let B = 0;
-      for (let p = 0; p < wx.length; ++p) {
-        const wgt = wx[p];
-        if (wgt === 0) continue;
-        const q = (base + x0 + p) * ch;
-        R += wgt * data[q];
-        G += wgt * data[q + 1];
-        B += wgt * data[q + 2];
-      }
-      r[3 * i] = R;
-      r[3 * i + 1] = G;
-      r[3 * i + 2] = B;
-    }
-    rows.set(y, r);
-    return r;
-  };
   const k = 1 / 255;
-  const acc = new Float64Array(outW * 3);
+  const acc = new Float32Array(outW * 3);
   for (let j = 0; j < outH; ++j) {
     acc.fill(0);
-    const wy = ty.weights[j];
-    for (let q = 0; q < wy.length; ++q) {
-      if (wy[q] === 0) continue;
-      const r = filteredRow(ty.first[j] + q);
-      for (let i = 0; i < 3 * outW; ++i) acc[i] += wy[q] * r[i];
+    for (let q = 0; q < ty.n; ++q) {
+      const wy = ty.weights[j * ty.n + q];
+      if (wy === 0) continue;
+      const base = (ty.first[j] + q) * W;
+      for (let i = 0; i < outW; ++i) {
+        let R = 0;
+        let G = 0;
+        let B = 0;
+        const x0 = tx.first[i];
+        for (let p = 0; p < tx.n; ++p) {
+          const wgt = tx.weights[i * tx.n + p];
+          if (wgt === 0) continue;
+          const o = (base + x0 + p) * ch;
+          R += wgt * data[o];
+          G += wgt * data[o + 1];
+          B += wgt * data[o + 2];
+        }
+        acc[3 * i] += wy * R;
+        acc[3 * i + 1] += wy * G;
+        acc[3 * i + 2] += wy * B;
+      }
     }
     const o = j * outW * 3;
     for (let i = 0; i < 3 * outW; ++i) out[o + i] = acc[i] * k;

@@ -70,6 +70,8 @@
 //           minPresence? (0.3)           the landmark network's hand presence to keep a hand
 //                                        (MediaPipe's 0.5 drops the wearer's hand gripping a
 //                                        plate on the kitchen clip; tests/web/kitchen_hands)
+//           tracker? ({})                further HandTracker options over
+//                                        PIPELINE_TRACKER_OPTIONS (experiments)
 //           groundScale? (true)          the ground cue of the metric scale: the cameras' height
 //                                        above the map's floor plane (scale/ground_scale.hpp)
 //           eyeHeight? (1.6)             that height in metres (a standing adult's head camera;
@@ -135,6 +137,14 @@ export const NUM_KP = 21;
 /** The hand tracker's defaults in the pipeline (measured with web/tools/eval_kitchen_hands.mjs). */
 export const PIPELINE_DETECT_GAP = 1;
 export const PIPELINE_MIN_PRESENCE = 0.3;
+/** The rest of the pipeline's tracking policy (hand_tracker.mjs; measured on the kitchen clip's
+ *  variants, examples/bench_real.mjs, docs/benchmarks.md): palm candidates down to 0.1, the best
+ *  two verified by the landmark network (below the detector's 0.5 a candidate needs MediaPipe's
+ *  own presence threshold, 0.5), the detector's input box-prefiltered, re-detection on the
+ *  frame a track is lost, constant-velocity search ROIs, and a lost track looked for once more. */
+export const PIPELINE_TRACKER_OPTIONS = Object.freeze({
+  candidateScore: 0.1, candidatePresence: 0.5, maxCandidates: 2, palmPrefilter: 0.5, redetectOnLoss: true, motion: true, coast: 1,
+});
 
 function abortError() {
   const e = new Error('the pipeline was aborted');
@@ -202,8 +212,10 @@ export function slamSize(width, height, maxSide = 640) {
   return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
 }
 
-/** P(right) of a detection from its label and score. */
+/** P(right) of a detection: its track's (the tracker's handedness evidence summed over the
+ *  frames of the track), else from its label and score. */
 function pRight(h) {
+  if (h.track && Number.isFinite(h.track.pRight)) return h.track.pRight;
   const s = h.handednessScore ?? 1;
   return h.handedness === 'right' ? s : 1 - s;
 }
@@ -211,24 +223,35 @@ function pRight(h) {
 /**
  * Left/right slots for this frame's detections (at most one per side): the assignment of least
  * cost, where a detection's cost on a side is
- *   -log P(side) from the landmark network's handedness, clamped to [0.05, 0.95] (one frame's
- *     label, which flips now and then with full confidence, can be outvoted), minus
- *   CONTINUITY * (1 - d / reach) when it lies within `reach` px of that side's wrist in the
- *     previous frame (tracks keep their side),
+ *   -log P(side) from the landmark network's handedness (of the detection's track when the
+ *     tracker gives one), clamped to [0.05, 0.95] (one frame's label, which flips now and then
+ *     with full confidence, can be outvoted), minus
+ *   CONTINUITY when it continues the track that side last held (prev.tracks, tracker ids kept
+ *     over frames without that side), else CONTINUITY * (1 - d / reach) / age when it lies
+ *     within `reach` px of that side's last wrist, seen `age` frames ago (1: the previous
+ *     frame; tracks keep their side, and a hand lost for a few frames mostly comes back where
+ *     it was),
  * plus, for two hands, CROSSED when the left slot's wrist lies right of the right slot's (hands
- * rarely cross in an egocentric view).
- * prev: { left: [x, y] | null, right: [x, y] | null }; reach: pixels.
+ * rarely cross in an egocentric view: CROSSED exceeds both tracks' continuity, so two hands in
+ * view are ordered left to right unless both hands' handedness evidence holds the crossing; a
+ * track whose first frames' labels were wrong, as the network's often are on a hand entering
+ * at the bottom edge, changes side as soon as the other hand is in view).
+ * prev: { left: [x, y] | null, right: [x, y] | null, age?: { left, right } (default 1),
+ *         tracks?: { left: id | null, right: id | null } } (sideState / updateSideState);
+ * reach: pixels.
  */
 export function assignSides(dets, prev, reach) {
   const CONTINUITY = 3.5;
-  const CROSSED = 2;
+  const CROSSED = 2 * CONTINUITY + 2;
   const cost = (d, side) => {
     const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 0.05), 0.95);
     let c = -Math.log(p);
     const w = prev[side];
-    if (w) {
+    if (d.track && prev.tracks && prev.tracks[side] === d.track.id) c -= CONTINUITY;
+    else if (w) {
       const dist = Math.hypot(d.landmarks[0] - w[0], d.landmarks[1] - w[1]);
-      if (dist < reach) c -= CONTINUITY * (1 - dist / reach);
+      const age = prev.age ? Math.max(1, prev.age[side]) : 1;
+      if (dist < reach) c -= (CONTINUITY * (1 - dist / reach)) / age;
     }
     return c;
   };
@@ -243,6 +266,28 @@ export function assignSides(dets, prev, reach) {
   const ab = cost(a, 'left') + cost(b, 'right') + crossed(a, b);
   const ba = cost(b, 'left') + cost(a, 'right') + crossed(b, a);
   return ab <= ba ? { left: a, right: b } : { left: b, right: a };
+}
+
+/** The state assignSides reads: no side seen yet. */
+export function sideState() {
+  return { left: null, right: null, age: { left: 0, right: 0 }, tracks: { left: null, right: null } };
+}
+
+/** After a frame's assignment: each filled side's wrist, age 1 and track (a track holds one side
+ *  at a time); an empty side keeps its last wrist and track, one frame older. */
+export function updateSideState(prev, sides) {
+  for (const side of ['left', 'right']) {
+    const d = sides[side];
+    if (!d) {
+      if (prev[side]) prev.age[side] += 1;
+      continue;
+    }
+    const other = side === 'left' ? 'right' : 'left';
+    prev[side] = [d.landmarks[0], d.landmarks[1]];
+    prev.age[side] = 1;
+    prev.tracks[side] = d.track ? d.track.id : null;
+    if (d.track && prev.tracks[other] === d.track.id) prev.tracks[other] = null;
+  }
 }
 
 function nanArray(n) {
@@ -391,13 +436,14 @@ export async function runPipeline(source, options, hooks = {}) {
       const m = options.models ?? {};
       const detectGap = options.detectGap ?? PIPELINE_DETECT_GAP;
       const minPresence = options.minPresence ?? PIPELINE_MIN_PRESENCE;
+      const policy = { ...PIPELINE_TRACKER_OPTIONS, ...(options.tracker ?? {}) };
       if (m.palmSession && m.landmarkSession) {
-        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence, lens: lensCrops });
+        tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence, lens: lensCrops });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops });
       }
     }
     if (options.depthModel && typeof options.depthModel.predict === 'function') {
@@ -418,7 +464,7 @@ export async function runPipeline(source, options, hooks = {}) {
     const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
     const keptRgb = depthModel ? [] : null; // frames (and hand masks) for the depth of the keyframes
     const keptMasks = depthModel ? [] : null;
-    const prevWrist = { left: null, right: null };
+    const prevWrist = sideState();
     const reach = 0.15 * Math.hypot(width, height);
     let T = 0;
     let channels = 0;
@@ -442,6 +488,7 @@ export async function runPipeline(source, options, hooks = {}) {
       }
       addTime('perception', now() - t1);
       const sides = assignSides(dets, prevWrist, reach);
+      updateSideState(prevWrist, sides);
       // --- fit ---
       t1 = now();
       const maskHands = [];
@@ -450,7 +497,6 @@ export async function runPipeline(source, options, hooks = {}) {
         const d = sides[side];
         if (!d) {
           fitters[side].reset();
-          prevWrist[side] = null;
           stores[side].push(null);
           continue;
         }
@@ -458,7 +504,6 @@ export async function runPipeline(source, options, hooks = {}) {
         const kp2 = new Float64Array(2 * NUM_KP);
         for (let k = 0; k < NUM_KP; ++k) { kp2[2 * k] = d.landmarks[stride * k]; kp2[2 * k + 1] = d.landmarks[stride * k + 1]; }
         const kp3 = d.world ? Float64Array.from(d.world) : null;
-        prevWrist[side] = [kp2[0], kp2[1]];
         let fit = null;
         try {
           const fi = fitInput(kp2, K);
