@@ -1,0 +1,297 @@
+#!/usr/bin/env node
+// bench_real_slam.mjs: the camera part of bench_real.mjs, fast enough to judge every SLAM change.
+// bench_real runs each variant of the kitchen clip through the whole pipeline (perception ~200
+// ms a frame); the SLAM sees only the grey frames at its resolution and the rendered hand masks.
+// This benchmark records exactly those inputs once per variant (the pipeline of web/cli.mjs with
+// a core whose MonoSlam writes what it is given: frames and masks as PNG, the intrinsics and
+// options), then runs the native `hawor slam` on them and judges the camera as bench_real does
+// (COLMAP's two segments, Sim(3) ATE in % of the segment's path, through `hawor metrics camera`).
+//
+//   node examples/bench_real_slam.mjs [--work DIR] [--inputs DIR] [--variants a,b] [--hawor BIN]
+//        [--core hawor_core.mjs] [--jobs N] [--json OUT] [--record-only] [--rerecord]
+//        [-- extra hawor slam flags]
+//
+// --work DIR    bench_real's work folder (default $TMPDIR/hawor_bench_real): its variants/ and
+//               colmap/reference.json are used (run bench_real.mjs --make-only once, and COLMAP
+//               through a first bench_real run); nothing there is written.
+// --inputs DIR  the recorded SLAM inputs (default $TMPDIR/hawor_bench_real_slam): NAME/frames/
+//               NNNNNN.png (grey, the SLAM's resolution), NAME/masks/NNNNNN.png (only frames with
+//               hands), NAME/slam.json (intrinsics, options, frame count). Recorded when missing
+//               (or with --rerecord) with the checkout's core and networks; the runs' outputs go
+//               to NAME/out/.
+// The SLAM runs as the pipeline's first pass does (masks, --refine-focal, the focal prior the
+// pipeline gave); the pipeline's further passes with a refined focal are not repeated (the focal
+// was refined on none of the variants). Native and WebAssembly builds of the same code differ in
+// the last bits of their arithmetic, and the front end's choices amplify that (a variant may
+// initialise 40 frames apart), so --core FILE runs the WebAssembly core's MonoSlam on the same
+// inputs in this process instead (the product's build; $HAWOR_CORE is used for recording only).
+// `hawor metrics camera` (--hawor) scores both.
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdirSync, readFileSync, readdirSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { deflateSync, inflateSync } from 'node:zlib';
+
+import { VARIANTS, origFrame, segmentsOf, scoreCamera } from './bench_real.mjs';
+import { crc32 } from '../web/tools/npz.mjs';
+
+const repo = resolve(dirname(fileURLToPath(import.meta.url)), '..');
+
+// ------------------------------------------------------------------------------------ PNG (grey)
+function chunk(type, data) {
+  const b = Buffer.alloc(12 + data.length);
+  b.writeUInt32BE(data.length, 0);
+  b.write(type, 4, 'latin1');
+  data.copy(b, 8);
+  b.writeUInt32BE(crc32(b.subarray(4, 8 + data.length)), 8 + data.length);
+  return b;
+}
+/** An 8-bit PNG of w x h pixels of c channels (1: grey; 3: RGB; 4: RGBA written as RGB, the
+ *  SLAM's grey ignores alpha). */
+export function greyPng(bytes, w, h, c = 1) {
+  const oc = c === 1 ? 1 : 3;
+  const raw = Buffer.alloc((w * oc + 1) * h);
+  for (let y = 0; y < h; ++y) {
+    const row = y * (w * oc + 1) + 1;
+    if (c === oc) Buffer.from(bytes.buffer, bytes.byteOffset + y * w * c, w * c).copy(raw, row);
+    else for (let x = 0; x < w; ++x) for (let k = 0; k < 3; ++k) raw[row + 3 * x + k] = bytes[(y * w + x) * c + k];
+  }
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(w, 0);
+  ihdr.writeUInt32BE(h, 4);
+  ihdr[8] = 8; ihdr[9] = oc === 1 ? 0 : 2; ihdr[10] = 0; ihdr[11] = 0; ihdr[12] = 0;
+  return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr), chunk('IDAT', deflateSync(raw, { level: 3 })), chunk('IEND', Buffer.alloc(0))]);
+}
+
+/** Decodes the PNGs greyPng writes (8-bit grey or RGB, filter 0 on every row): { w, h, c, data }. */
+export function readOwnPng(buf) {
+  const w = buf.readUInt32BE(16), h = buf.readUInt32BE(20);
+  const c = buf[25] === 0 ? 1 : 3;
+  const idat = [];
+  for (let p = 8; p < buf.length;) {
+    const n = buf.readUInt32BE(p);
+    const type = buf.toString('latin1', p + 4, p + 8);
+    if (type === 'IDAT') idat.push(buf.subarray(p + 8, p + 8 + n));
+    p += 12 + n;
+  }
+  const raw = inflateSync(Buffer.concat(idat));
+  const data = new Uint8Array(w * h * c);
+  for (let y = 0; y < h; ++y) {
+    if (raw[y * (w * c + 1)] !== 0) throw new Error('readOwnPng: a filtered row (not a PNG this benchmark wrote)');
+    data.set(raw.subarray(y * (w * c + 1) + 1, (y + 1) * (w * c + 1)), y * w * c);
+  }
+  return { w, h, c, data };
+}
+
+// ------------------------------------------------------------------------------------ recording
+/** Runs the pipeline on `file` with a core whose first MonoSlam records its inputs into dir. */
+async function record(file, dir) {
+  const cli = await import('../web/cli.mjs');
+  const { runPipeline } = await import('../web/src/pipeline/run.mjs');
+  rmSync(dir, { recursive: true, force: true });
+  mkdirSync(join(dir, 'frames'), { recursive: true });
+  mkdirSync(join(dir, 'masks'), { recursive: true });
+  const core = await cli.loadCore(process.env.HAWOR_CORE);
+  const meta = { intrinsics: null, options: null, frames: 0, masks: 0 };
+  let first = true;
+  const Base = core.MonoSlam;
+  // (embind classes cannot be extended: a constructor function that returns the patched instance)
+  function Recording(K, w, h, opts) {
+    const slam = new Base(K, w, h, opts);
+    if (!first) return slam;
+    first = false;
+    Object.assign(meta, { intrinsics: [...K], width: w, height: h, options: opts });
+    const proc = slam.process.bind(slam);
+    slam.process = (frame, mask) => {
+      const name = `${String(meta.frames).padStart(6, '0')}.png`;
+      // grey at the SLAM's size; RGB(A) when the video already has it (the core makes it grey)
+      const c = frame.length / (meta.width * meta.height);
+      if (![1, 3, 4].includes(c)) throw new Error(`bench_real_slam: a ${frame.length}-byte SLAM frame at ${meta.width}x${meta.height}`);
+      writeFileSync(join(dir, 'frames', name), greyPng(frame, meta.width, meta.height, c));
+      if (mask) { writeFileSync(join(dir, 'masks', name), greyPng(mask, meta.width, meta.height)); meta.masks += 1; }
+      meta.frames += 1;
+      return proc(frame, mask);
+    };
+    return slam;
+  }
+  const wrapped = new Proxy(core, { get: (t, k) => (k === 'MonoSlam' ? Recording : t[k]) });
+  const info = cli.probeVideo(file);
+  const models = join(repo, 'web', 'models');
+  const hm = cli.handModelFiles({});
+  const ort = await import('onnxruntime-web');
+  ort.env.wasm.numThreads = 2;
+  ort.env.logLevel = 'error';
+  const source = { width: info.width, height: info.height, fps: info.fps, frameCount: info.frameCount,
+    frames: cli.decodeFrames(file, info.width, info.height, null, 0, { decode: 0 }) };
+  const result = await runPipeline(source, {
+    core: wrapped, ort, models: { palm: new Uint8Array(readFileSync(join(models, 'palm_detection_lite.onnx'))), landmark: new Uint8Array(readFileSync(join(models, 'hand_landmark_lite.onnx'))) },
+    handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right },
+    refineFocal: true, modelKind: 'lite', threads: 2, groundScale: true,
+  });
+  meta.fps = info.fps;
+  meta.pipelineCamera = { status: Array.from(result.camera.status) };
+  writeFileSync(join(dir, 'slam.json'), JSON.stringify(meta));
+  return meta;
+}
+
+// ------------------------------------------------------------------------------------ runs
+function readTum(text) {
+  return text.trim().split('\n').filter((l) => l && !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
+}
+
+function runSlam(o, dir, meta, extra) {
+  return new Promise((res) => {
+    const out = join(dir, 'out');
+    rmSync(out, { recursive: true, force: true });
+    mkdirSync(out, { recursive: true });
+    const args = ['slam', '--images', join(dir, 'frames'), '--masks', join(dir, 'masks'), '--intrinsics', meta.intrinsics.join(','),
+      '--out', join(out, 'camera.tum'), '--stats', join(out, 'stats.json'), '--fps', String(meta.fps ?? 30)];
+    if (meta.options?.refineFocal) args.push('--refine-focal', '--focal-prior', String(meta.options.focalPriorSigma ?? 0.3));
+    args.push(...extra);
+    const p = spawn('nice', ['-n', '10', o.hawor, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+    let stdout = '';
+    let stderr = '';
+    p.stdout.on('data', (d) => { stdout += d; });
+    p.stderr.on('data', (d) => { stderr += d; });
+    p.on('close', (code) => {
+      writeFileSync(join(out, 'slam.log'), stderr);
+      let summary = null;
+      try { summary = JSON.parse(stdout.trim().split('\n').pop()); } catch { summary = null; }
+      res({ code, summary, stderrTail: stderr.trim().split('\n').slice(-3).join('\n') });
+    });
+  });
+}
+
+/** The same run through the WebAssembly core's MonoSlam (the product's build) in this process:
+ *  { code, summary, tum rows, status }. */
+async function runSlamWasm(o, dir, meta) {
+  const { loadCore } = await import('../web/src/core.mjs');
+  const core = await loadCore({ path: o.core });
+  const out = join(dir, 'out');
+  rmSync(out, { recursive: true, force: true });
+  mkdirSync(out, { recursive: true });
+  const slam = new core.MonoSlam(meta.intrinsics, meta.width, meta.height, meta.options);
+  const ms = [];
+  for (let i = 0; i < meta.frames; ++i) {
+    const name = `${String(i).padStart(6, '0')}.png`;
+    const f = readOwnPng(readFileSync(join(dir, 'frames', name)));
+    const mp = join(dir, 'masks', name);
+    const m = existsSync(mp) ? readOwnPng(readFileSync(mp)).data : null;
+    const t0 = performance.now();
+    slam.process(f.data, m);
+    ms.push(performance.now() - t0);
+  }
+  const r = slam.finish();
+  slam.delete();
+  const q = core.rotationsToQuaternions(r.rotations);
+  const fps = meta.fps ?? 30;
+  const rows = [];
+  for (let i = 0; i < meta.frames; ++i) rows.push([i / fps, r.translations[3 * i], r.translations[3 * i + 1], r.translations[3 * i + 2], q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]]);
+  writeFileSync(join(out, 'camera.tum'), rows.map((x) => x.join(' ')).join('\n') + '\n');
+  const names = ['tracked', 'interpolated', 'lost', 'relocalised'];
+  writeFileSync(join(out, 'stats.json'), JSON.stringify({ status: Array.from(r.status, (s) => names[s]) }));
+  ms.sort((a, b) => a - b);
+  return { code: 0, summary: { resets: r.numResets, median_ms_per_frame: ms[Math.floor(ms.length / 2)] } };
+}
+
+async function pool(items, jobs, fn) {
+  const out = new Array(items.length);
+  let next = 0;
+  const worker = async () => {
+    while (next < items.length) {
+      const k = next++;
+      out[k] = await fn(items[k], k);
+    }
+  };
+  await Promise.all(Array.from({ length: Math.max(1, jobs) }, worker));
+  return out;
+}
+
+const STATUS = { tracked: 0, interpolated: 1, lost: 2, relocalised: 3 };
+
+function parse(argv) {
+  const o = { work: join(tmpdir(), 'hawor_bench_real'), inputs: join(tmpdir(), 'hawor_bench_real_slam'), variants: Object.keys(VARIANTS),
+    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), jobs: 1, extra: [] };
+  const k = argv.indexOf('--');
+  if (k >= 0) { o.extra = argv.slice(k + 1); argv = argv.slice(0, k); }
+  for (let i = 0; i < argv.length; ++i) {
+    const a = argv[i];
+    const v = () => { if (i + 1 >= argv.length) throw new Error(`${a} needs a value`); return argv[++i]; };
+    if (a === '--work') o.work = v();
+    else if (a === '--inputs') o.inputs = v();
+    else if (a === '--variants') o.variants = v().split(',').filter(Boolean);
+    else if (a === '--hawor') o.hawor = v();
+    else if (a === '--core') o.core = resolve(v());
+    else if (a === '--jobs') o.jobs = Number(v());
+    else if (a === '--json') o.json = v();
+    else if (a === '--record-only') o.recordOnly = true;
+    else if (a === '--rerecord') o.rerecord = true;
+    else throw new Error(`unknown argument '${a}'`);
+  }
+  for (const n of o.variants) if (!VARIANTS[n]) throw new Error(`unknown variant '${n}' (known: ${Object.keys(VARIANTS).join(', ')})`);
+  return o;
+}
+
+const f2 = (x, d = 2) => (x === null || x === undefined || !Number.isFinite(x) ? '-' : x.toFixed(d));
+
+async function main(argv) {
+  const o = parse(argv);
+  const video = process.env.HAWOR_CLIP ?? resolve(repo, '..', 'shared', 'data', 'egocentric_kitchen.mp4');
+  const refFile = join(o.work, 'colmap', 'reference.json');
+  if (!existsSync(refFile)) throw new Error(`${refFile}: missing (run examples/bench_real.mjs once: it makes COLMAP's reference)`);
+  const segs = segmentsOf(JSON.parse(readFileSync(refFile, 'utf8')));
+  const n0 = 121;
+  for (const n of o.variants) {
+    const dir = join(o.inputs, n);
+    if (existsSync(join(dir, 'slam.json')) && !o.rerecord) continue;
+    const file = VARIANTS[n].vf ? join(o.work, 'variants', `${n}.mp4`) : video;
+    if (!existsSync(file)) throw new Error(`${file}: missing (node examples/bench_real.mjs --make-only)`);
+    process.stderr.write(`bench_real_slam: recording the SLAM inputs of ${n}...\n`);
+    const t0 = performance.now();
+    const m = await record(file, dir);
+    process.stderr.write(`bench_real_slam: ${n}: ${m.frames} frames ${m.width}x${m.height}, ${m.masks} masks (${((performance.now() - t0) / 1000).toFixed(0)} s)\n`);
+  }
+  if (o.recordOnly) return 0;
+  if (!existsSync(o.hawor)) throw new Error(`${o.hawor}: missing (cmake --build DIR --target hawor_cli)`);
+  const rows = await pool(o.variants, o.jobs, async (n) => {
+    const v = VARIANTS[n];
+    const dir = join(o.inputs, n);
+    const meta = JSON.parse(readFileSync(join(dir, 'slam.json'), 'utf8'));
+    const run = o.core ? await runSlamWasm(o, dir, meta) : await runSlam(o, dir, meta, o.extra);
+    if (run.code !== 0) return { name: n, error: `exit ${run.code}: ${run.stderrTail}` };
+    const stats = JSON.parse(readFileSync(join(dir, 'out', 'stats.json'), 'utf8'));
+    const tum = readTum(readFileSync(join(dir, 'out', 'camera.tum'), 'utf8'));
+    const T = tum.length;
+    const positions = new Float64Array(3 * T);
+    const quaternions = new Float64Array(4 * T);
+    tum.forEach((r, i) => { positions.set(r.slice(1, 4), 3 * i); quaternions.set(r.slice(4, 8), 4 * i); });
+    const st = stats.per_frame ? stats.per_frame.map((f) => STATUS[f.status] ?? 1) : (stats.status ?? []).map((s) => STATUS[s] ?? 1);
+    const res = { frameCount: T, camera: { positions, quaternions, status: st } };
+    const camera = scoreCamera(res, v, segs, n0, join(dir, 'out'), o.hawor);
+    const firstTracked = st.findIndex((s) => s === 0 || s === 3);
+    return { name: n, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
+      interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
+  });
+  const names = segs.map((s) => s.name);
+  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), 'init', 'lost', 'interp', 'resets', 'ms/frame'];
+  const lines = [head];
+  for (const r of rows) {
+    if (r.error) { lines.push([r.name, `error: ${r.error}`]); continue; }
+    lines.push([r.name, String(r.frames), ...names.map((s) => (r.camera[s]?.held ? `held ${f2(r.camera[s].atePct, 0)}` : f2(r.camera[s]?.atePct))),
+      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), f2(r.msMedian, 1)]);
+  }
+  const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
+  process.stdout.write(`${lines.map((l) => l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ')).join('\n')}\n`);
+  const within = rows.filter((r) => !r.error && names.every((s) => r.camera[s]?.atePct <= 2)).length;
+  process.stdout.write(`variants with ATE <= 2 % on every segment: ${within}/${rows.length}\n`);
+  if (o.json) writeFileSync(o.json, `${JSON.stringify({ segments: segs.map((s) => ({ ...s, poses: undefined })), variants: rows }, null, 1)}\n`);
+  return 0;
+}
+
+if (process.argv[1] && fileURLToPath(import.meta.url) === resolve(process.argv[1])) {
+  main(process.argv.slice(2)).then((c) => { process.exitCode = c; }, (e) => {
+    process.stderr.write(`bench_real_slam: ${e.stack ?? e.message}\n`);
+    process.exitCode = 1;
+  });
+}
