@@ -5,7 +5,7 @@
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
 //        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
-//        [--tracker JSON]
+//        [--tracker JSON] [--capture clean,phone,...]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -26,7 +26,12 @@
 // without the SLAM's focal refinement (a second table: refined focal, its error and ATE).
 // --hand-smooth K: runPipeline's handScaleSmooth (moving average of the camera-frame wrists before
 // the hand-anchored scale). --tracker '{"motion":false}': HandTracker options over the pipeline's
-// (runPipeline's options.tracker; '{"candidateScore":0.5,...}' for MediaPipe's policy). Each row also has handDepth per hand: the median ratio of the fitted
+// (runPipeline's options.tracker; '{"candidateScore":0.5,...}' for MediaPipe's policy).
+// --capture P1,P2: each sequence rendered through these `hawor synth --capture` profiles (motion
+// blur, rolling shutter, noise, exposure drift, the lens) and encoded as the profile's
+// capture.json says, one row per profile; the pipeline gets the lens (options.camera) and the
+// true focal at the video's size; 'none' is the default CRF 12 video. Simulated observations
+// are pinhole projections (use them without a lens). Each row also has handDepth per hand: the median ratio of the fitted
 // camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
 // fitted and the true depth (what the hand-anchored scale has to work with).
 // Timing: median over sequences of each stage's ms per frame.
@@ -67,6 +72,7 @@ function parse(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--mask-dilate') o.maskDilate = Number(v());
     else if (a === '--tracker') o.tracker = JSON.parse(v());
+    else if (a === '--capture') o.captures = v().split(',');
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
     else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
@@ -121,6 +127,12 @@ export function makeSequence(hawor, preset, seed, frames, size, dir, options = {
   return { dir, fx, fy, cx, cy, W, H, fps, lens: lensLine ? lensLine.slice(5).trim() : 'pinhole', videoWidth, videoHeight };
 }
 
+/** fx, fy, cx, cy of a sequence at its video's size (pixel centres at integers). */
+export function videoIntrinsics(seq) {
+  const s = seq.videoWidth / seq.W;
+  return [seq.fx * s, seq.fy * s, s * (seq.cx + 0.5) - 0.5, s * (seq.cy + 0.5) - 0.5];
+}
+
 /** Simulated perception: GT keypoints projected + noise (options.observations). */
 export function simulatedObservations(gt, seq, T, noisePx, noiseMm, seed) {
   const n = rng(seed);
@@ -168,6 +180,10 @@ export function noisyTrueDepth(seq, seed) {
 
 /** Accuracy of a result against a sequence's ground truth. */
 export function evaluate(core, result, gt, seq, gtCam) {
+  // the ground truth in the video's pixels (a profile's encoding may downscale; pixel centres at
+  // integers), the result's keypoints undistorted to that pinhole camera
+  const k = videoIntrinsics(seq);
+  const undistort = (kp) => (seq.lens && seq.lens !== 'pinhole' ? core.undistortPoints(k, seq.lens, Float64Array.from(kp)) : kp);
   const T = result.frameCount;
   let cam = { ate: NaN, ate_s: NaN, scale: NaN };
   try {
@@ -187,9 +203,9 @@ export function evaluate(core, result, gt, seq, gtCam) {
       if (gv[t] && h.valid[t]) {
         valid[t] = 1; observed += 1;
         // wrist in the image vs both true wrists
-        const proj = (jc) => [seq.fx * (jc[0] / jc[2]) + seq.cx, seq.fy * (jc[1] / jc[2]) + seq.cy];
+        const proj = (jc) => [k[0] * (jc[0] / jc[2]) + k[2], k[1] * (jc[1] / jc[2]) + k[3]];
         const me = proj(gt[`${side}_joints_cam`].data.subarray(63 * t, 63 * t + 3));
-        const kp = h.keypoints2d.subarray(42 * t, 42 * t + 2);
+        const kp = undistort(h.keypoints2d.subarray(42 * t, 42 * t + 2));
         const dMe = Math.hypot(kp[0] - me[0], kp[1] - me[1]);
         if (gt[`${other}_valid`].data[t]) {
           const ot = proj(gt[`${other}_joints_cam`].data.subarray(63 * t, 63 * t + 3));
@@ -242,8 +258,11 @@ async function main() {
   mkdirSync(o.work, { recursive: true });
   const rows = [];
   for (const preset of o.presets) {
-    for (const seed of o.seeds) {
-      const seq = makeSequence(o.hawor, preset, seed, o.frames, o.size, join(o.work, `${preset}_${seed}_${o.frames}_${o.size}`));
+    for (const seed of o.seeds) for (const capture of o.captures ?? ['none']) {
+      const tag = capture === 'none' ? '' : `_${capture}`;
+      const seq = makeSequence(o.hawor, preset, seed, o.frames, o.size, join(o.work, `${preset}_${seed}_${o.frames}_${o.size}${tag}`),
+        capture === 'none' ? {} : { capture });
+      const fxVideo = videoIntrinsics(seq)[0];
       const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
       const gtCam = readTumPositions(join(seq.dir, 'camera_gt.tum'));
       const info = probeVideo(join(seq.dir, 'video.mp4'));
@@ -254,7 +273,8 @@ async function main() {
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
           ...(o.tracker ? { tracker: o.tracker } : {}),
-          ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * seq.fx)) * 180) / Math.PI } : { focalPx: seq.fx }) };
+          ...(seq.lens !== 'pinhole' ? { camera: seq.lens } : {}),
+          ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * fxVideo)) * 180) / Math.PI } : { focalPx: fxVideo }) };
         if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
         if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);
         const t0 = performance.now();
@@ -264,8 +284,8 @@ async function main() {
         const T = result.frameCount;
         const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
         const row = {
-          sequence: `${preset}/${seed}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
-          focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: seq.fx, focalRefined: result.intrinsics.refined,
+          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
+          focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: fxVideo, focalRefined: result.intrinsics.refined,
           focalStd: result.intrinsics.focalStd, focalEstimate: result.intrinsics.focalEstimateFx, focalReason: result.intrinsics.focalReason,
           found: `${ev.perHand.left.observed + ev.perHand.right.observed}/${ev.perHand.left.inView + ev.perHand.right.inView}`,
           swaps: ev.perHand.left.swaps + ev.perHand.right.swaps,
