@@ -22,11 +22,13 @@ The rendered, encoded and grey frames are cached in --work (rendering costs 100-
 per profile): WORK/PRESET_PROFILE_sSEED/{frames/, mask/, camera_gt.tum, meta.json}. The SLAM
 runs again on every call (a few ms a frame) unless --reuse-slam; its outputs go to
 WORK/.../slam_{masked,unmasked}/. Extra arguments after `--` go to every `hawor slam`.
+--readout gives each run its profile's rolling-shutter readout (`hawor slam --readout`, the
+readout_s of the profile's capture.json; clean: 0).
 
   bench_slam_capture.py [--presets walk,table_work,fast_turns,hands_cover]
       [--profiles clean,phone,action_cam,aria,low_light,webcam_360p] [--seeds 1-4]
       [--frames 150] [--size 640x480] [--model default|synthetic] [--jobs 2]
-      [--work DIR] [--hawor BIN] [--reuse-slam] [--masked-only] [--json OUT] [-- slam flags]
+      [--work DIR] [--hawor BIN] [--reuse-slam] [--masked-only] [--readout] [--json OUT] [-- slam flags]
 
 The presets default to the moving ones whose targets are judged (pure_rotation has no
 observable translation for this front end; bench_slam reports it). Cost at the defaults on two
@@ -175,6 +177,20 @@ def prepare(a, preset, profile, seed):
     return name
 
 
+_readouts = {}
+
+
+def profile_readout(a, profile):
+    """The profile's rolling-shutter readout (seconds), from the capture.json of a one-frame render."""
+    if profile not in _readouts:
+        with tempfile.TemporaryDirectory() as t:
+            run([a.hawor, "synth", "--preset", "walk", "--seed", "1", "--frames", "1", "--size", "64x48", "--capture", profile,
+                 "--out", os.path.join(t, "s")])
+            cj = os.path.join(t, "s", "capture.json")
+            _readouts[profile] = json.load(open(cj))["readout_s"] if os.path.exists(cj) else 0.0
+    return _readouts[profile]
+
+
 def slam(a, name, masked, extra):
     d = os.path.join(a.work, name)
     with open(os.path.join(d, "meta.json")) as f:
@@ -189,6 +205,8 @@ def slam(a, name, masked, extra):
            "--out", os.path.join(od, "camera.tum"), "--stats", os.path.join(od, "stats.json"), "--fps", "%g" % meta["fps"]]
     if not masked:
         cmd.append("--no-mask")
+    if a.readout:
+        cmd += ["--readout", "%.10g" % profile_readout(a, meta["profile"])]
     summary = json.loads(run(cmd + extra).strip().splitlines()[-1])
     est = read_tum(os.path.join(od, "camera.tum"))
     if np.all(est[:, 1:4] == est[0, 1:4]):
@@ -231,6 +249,8 @@ def main(argv):
     ap.add_argument("--hawor", default=os.path.join(here, "..", "build", "native-clang", "examples", "hawor"))
     ap.add_argument("--reuse-slam", action="store_true", help="reuse the SLAM results already in --work")
     ap.add_argument("--masked-only", action="store_true", help="skip the unmasked runs")
+    ap.add_argument("--readout", action="store_true",
+                    help="give hawor slam each profile's rolling-shutter readout (--readout S)")
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
     presets = [p for p in a.presets.split(",") if p]

@@ -26,7 +26,8 @@ namespace {
 const char* kSlamHelp =
     "usage: hawor slam --images DIR --intrinsics fx,fy,cx,cy [--camera LENS] [--masks DIR]\n"
     "                  [--no-mask] --out TRAJ.tum [--keyframe-depths KD.npz] [--stats STATS.json]\n"
-    "                  [--fps F] [--max-frames N] [--refine-focal [--focal-prior S]] [--verbose]\n"
+    "                  [--fps F] [--readout S] [--max-frames N] [--refine-focal [--focal-prior S]]\n"
+    "                  [--verbose]\n"
     "\n"
     "Sparse monocular SLAM (KLT tracks, PnP, keyframes, sliding-window and global bundle\n"
     "adjustment) with the hands masked out of the front end and the bundle adjustment.\n"
@@ -50,6 +51,11 @@ const char* kSlamHelp =
     "  --stats STATS.json    per-frame status (tracked|interpolated|lost|relocalised),\n"
     "                        keyframe flags, PnP inliers and ms, plus totals\n"
     "  --fps F               timestamps (default 30)\n"
+    "  --readout S           rolling shutter: seconds from the first row's exposure to the\n"
+    "                        last's (a phone at 1080p: 0.015-0.03; default 0, a global\n"
+    "                        shutter); at most 1/fps. The tracked points are brought to the\n"
+    "                        middle row's time under the head's rotation (with --camera: the\n"
+    "                        rectified image's rows, an approximation)\n"
     "  --max-frames N        only the first N frames\n"
     "  --refine-focal        self-calibrate the focal (fx, fy by one factor) in the final bundle\n"
     "                        adjustment where the motion determines it; the --intrinsics focal\n"
@@ -89,7 +95,7 @@ bool fileExists(const std::string& p) {
 
 int cmdSlam(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"images", "intrinsics", "camera", "masks", "out", "keyframe-depths", "stats", "fps", "max-frames",
+                  {"images", "intrinsics", "camera", "masks", "out", "keyframe-depths", "stats", "fps", "readout", "max-frames",
                    "focal-prior"},
                   {"no-mask", "verbose", "refine-focal"});
   if (args.help()) {
@@ -123,6 +129,9 @@ int cmdSlam(int argc, char** argv) {
   cam.fx = k[0], cam.fy = k[1], cam.cx = k[2], cam.cy = k[3];
   hawor::SlamOptions<double> opt;
   opt.useMasks = useMasks;
+  const double readout = args.number("readout", 0.0);
+  if (!(readout >= 0 && readout <= 1.0 / fps)) throw UsageError("--readout must be between 0 and 1/fps seconds");
+  opt.rollingShutter = readout * fps;
   opt.refineFocal = args.flag("refine-focal");
   if (args.has("focal-prior")) {
     if (!opt.refineFocal) throw UsageError("--focal-prior needs --refine-focal");

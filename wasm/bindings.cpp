@@ -16,7 +16,7 @@
 //       the next frame's warm start; reset() forgets it (track lost); hasPrevious().
 //   renderHandMasks(width, height, intrinsics, hands: [{model, rot, handPose, betas, trans,
 //       value?}], dilatePx) -> Uint8Array(width*height)
-//   new MonoSlam(intrinsics, width, height, {useMasks?, refineFocal?, focalPriorSigma?, focalPriorFx?}) .process(frame: Uint8Array(W*H*c),
+//   new MonoSlam(intrinsics, width, height, {useMasks?, refineFocal?, focalPriorSigma?, focalPriorFx?, rollingShutter?}) .process(frame: Uint8Array(W*H*c),
 //       c = 1 grey, 3 RGB or 4 RGBA; mask: Uint8Array(W*H), hand != 0, or null) -> status; .finish() -> {rotations (9T, row-major R_c2w),
 //       translations (3T), status: Uint8Array(T) (0 tracked, 1 interpolated, 2 lost,
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
@@ -431,6 +431,10 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
     hawor::SlamOptions<double> opt;
     if (!absent(options) && !absent(options["useMasks"])) opt.useMasks = options["useMasks"].as<bool>();
     if (!absent(options) && !absent(options["refineFocal"])) opt.refineFocal = options["refineFocal"].as<bool>();
+    if (!absent(options) && !absent(options["rollingShutter"])) {
+      opt.rollingShutter = options["rollingShutter"].as<double>();
+      if (!(opt.rollingShutter >= 0 && opt.rollingShutter <= 1)) throw hawor::Error("rollingShutter must be in [0, 1] (readout / frame interval)");
+    }
     if (!absent(options) && !absent(options["focalPriorSigma"])) {
       opt.focal.priorSigmaLog = options["focalPriorSigma"].as<double>();
       if (!(opt.focal.priorSigmaLog > 0)) throw hawor::Error("focalPriorSigma must be > 0");

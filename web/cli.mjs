@@ -2,7 +2,7 @@
 // cli.mjs: the headless hawor pipeline on a video file (node glue only: arguments, ffmpeg
 // decoding, progress, files; every algorithm is in web/src/pipeline/run.mjs and the C++ core).
 //
-//   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera LENS] [--no-refine-focal] [--mano DIR]
+//   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera LENS] [--readout S] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale]
@@ -45,7 +45,7 @@ import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
-const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -68,6 +68,7 @@ export function parseArgs(argv) {
     else if (a === '--fov') { o.fovDeg = num(next(), '--fov', 1); if (o.fovDeg >= 179) throw usage('--fov must be below 179 degrees'); }
     else if (a === '--camera') { o.camera = next(); if (!o.camera.trim()) throw usage('--camera needs a lens (pinhole, opencv:k1,k2,p1,p2[,k3] or fisheye:k1,k2,k3,k4)'); }
     else if (a === '--no-refine-focal') o.refineFocal = false;
+    else if (a === '--readout') { o.readout = num(next(), '--readout', 0); if (o.readout > 0.1) throw usage('--readout is the rolling shutter\'s readout in seconds (a phone: 0.015-0.03), at most one frame interval'); }
     else if (a === '--mano') o.mano = next();
     else if (a === '--depth-model') o.depthModel = next();
     else if (a === '--depth-config') o.depthConfig = next();
@@ -315,7 +316,7 @@ export async function main(argv) {
   const cpu0 = process.cpuUsage();
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
-    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
+    handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, readout: o.readout, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
     groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight,
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);

@@ -248,6 +248,9 @@ test('pipeline: bad sources are refused with clear errors, aborts are prompt, a 
   for (const eyeHeight of [0.5, 3.5, NaN, '1.6']) {
     await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(1, 64, 48) }, { ...base, eyeHeight }), /camera height above the floor must be between 0\.8 and 3 m/);
   }
+  for (const readout of [0.05, -0.01, NaN, '0.01']) {
+    await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(1, 64, 48) }, { ...base, readout }), /rolling-shutter readout .* must lie between 0 and the frame interval \(0\.0333 s\)/);
+  }
   // abort: the third frame finds the signal set
   const ac = new AbortController();
   await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(50, 64, 48) }, base, { signal: ac.signal, onFrame: (f) => { if (f.index === 1) ac.abort(); } }),
@@ -271,6 +274,10 @@ test('pipeline CLI: usage errors exit 2; not a video, no video stream exit 1; 1 
     assert.equal(r.status, 2); assert.match(r.stderr, /--model must be lite or full/);
     r = runCli(['run', 'x.mp4', '--out', dir, '--eye-height', '5']);  // the app's and the pipeline's range too
     assert.equal(r.status, 2); assert.match(r.stderr, /--eye-height: the camera height above the floor must be between 0\.8 and 3 m, not 5/);
+    r = runCli(['run', 'x.mp4', '--out', dir, '--readout', '0.5']);
+    assert.equal(r.status, 2); assert.match(r.stderr, /--readout is the rolling shutter's readout in seconds/);
+    r = runCli(['run', 'x.mp4', '--out', dir, '--readout', 'slow']);
+    assert.equal(r.status, 2); assert.match(r.stderr, /--readout/);
     r = runCli(['run', join(dir, 'none.mp4'), '--out', dir]);
     assert.equal(r.status, 1); assert.match(r.stderr, /none\.mp4: no such file/);
     r = runCli(['run', cli, '--out', dir, '--depth-model', join(dir, 'none.onnx')]);

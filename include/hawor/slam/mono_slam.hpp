@@ -155,6 +155,14 @@ struct SlamOptions {
   KltOptions klt;
   CornerOptions corners;
   int maxFeatures = 350;            ///< live tracks after replenishing at a keyframe
+  /// Rolling shutter: the readout time from the first row to the last as a fraction of the frame
+  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.6–0.9; 0: a global shutter).
+  /// Row v is exposed (v − (H−1)/2)/H · readout frames after the middle row; under the head's
+  /// angular velocity ω (rotation vector per frame, camera axes, from the last two frames:
+  /// R(t+δ) = R(t)·exp(δω)) the ray seen on row v is brought to the middle row's time,
+  /// b ← exp(δω)·b, before any geometry uses it (KLT keeps the raw pixels). Translation during
+  /// the readout is neglected (a head moves ~1 cm in 25 ms).
+  Scalar rollingShutter = Scalar(0);
   bool useMasks = true;             ///< dual hand masking (false: masks are ignored, the ablation)
   int maskDilatePx = 6;             ///< front-end dilation of the hand mask
   int maskBlock = 4;                ///< keyframe mask resolution (pixels per bit)
@@ -393,7 +401,8 @@ class MonoSlam {
     }
     if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
         opt_.keyframeMaxInterval < 1 || opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
-        opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0))) {
+        opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0)) ||
+        !(opt_.rollingShutter >= Scalar(0) && opt_.rollingShutter <= Scalar(1))) {
       throw Error("MonoSlam: invalid options");
     }
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
@@ -628,7 +637,8 @@ class MonoSlam {
   };
   struct Track {
     int id;
-    Vec2f uv = Vec2f::Zero();
+    Vec2f uv = Vec2f::Zero();     ///< position for the geometry (rolling shutter compensated)
+    Vec2f px = Vec2f::Zero();     ///< position in the image (KLT's; = uv for a global shutter)
     int point = -1;
     std::vector<Obs> kfObs;  ///< keyframe observations while unmapped
     Vec2f refUv = Vec2f::Zero();  ///< position in the initialisation reference frame
@@ -681,6 +691,34 @@ class MonoSlam {
            uv(1) <= float(height_ - 1) - margin;
   }
 
+  /// SlamOptions::rollingShutter: image pixel → the middle row's time (sign +1), or back (−1,
+  /// the inverse to first order). The identity for a global shutter or without a rotation rate.
+  Vec2f rollingShutterShift(const Vec2f& p, Scalar sign) const {
+    if (!(opt_.rollingShutter > Scalar(0)) || rsOmega_.isZero(Scalar(0))) return p;
+    const Scalar d = sign * opt_.rollingShutter * ((Scalar(p(1)) - Scalar(0.5) * Scalar(height_ - 1)) / Scalar(height_));
+    const V3 b((Scalar(p(0)) - cam_.cx) / cam_.fx, (Scalar(p(1)) - cam_.cy) / cam_.fy, Scalar(1));
+    const V3 r = SO3<Scalar>::exp(V3(rsOmega_ * d)) * b;
+    if (!(r(2) > Scalar(0))) return p;
+    return Vec2f(float(cam_.fx * r(0) / r(2) + cam_.cx), float(cam_.fy * r(1) / r(2) + cam_.cy));
+  }
+
+  /// The camera's rotation over the last frame from the raw pixels KLT just tracked (from_ → to_,
+  /// ok_), as a rotation vector in camera axes (R(t+1) = R(t)·exp(ω)); zero for a global shutter
+  /// or with fewer than 8 rays. The rolling shutter's shear is the same in both frames under a
+  /// steady turn, so the raw rays' best rotation is the middle rows' one.
+  V3 rsRate() {
+    if (!(opt_.rollingShutter > Scalar(0))) return V3::Zero();
+    std::vector<V2> a, b;
+    for (std::size_t i = 0; i < from_.size(); ++i) {
+      if (!ok_[i]) continue;
+      a.push_back(normalised(from_[i]));
+      b.push_back(normalised(to_[i]));
+    }
+    Mat3<Scalar> R21;
+    if (a.size() < 8 || two_view_detail::rotationFromRaysReweighted(a, b, Scalar(3), R21) < 8) return V3::Zero();
+    return SO3<Scalar>::fromMatrix(Mat3<Scalar>(R21.transpose())).log();
+  }
+
   void trackFeatures(int f) {
     // Prediction (c2w). Rotation: constant angular velocity, R_pred = R1·(R2ᵀ·R1), from the last
     // two frames' rotations, known from the map or from the tracked rays (a fast head turn moves
@@ -706,6 +744,9 @@ class MonoSlam {
     // Camera-1 → predicted-camera rotation for directions (the infinite homography K·Rpc·K⁻¹:
     // exact for distant points, a few pixels off for near ones under the small head translation).
     const Mat3<Scalar> Rpc = predicted_.rotationMatrix().transpose() * p1.T.rotationMatrix();
+    // The rolling shutter's angular velocity for this frame: the last step's, measured on the raw
+    // pixels (rsRate, below), so that the compensation never feeds back into its own rate.
+    rsOmega_ = rsOmegaNext_;
     from_.resize(tracks_.size());
     to_.resize(tracks_.size());
     const SE3T Tcw = predicted_.inverse();
@@ -714,7 +755,7 @@ class MonoSlam {
     int npred = 0;
     for (std::size_t i = 0; i < tracks_.size(); ++i) {
       const Track& t = tracks_[i];
-      from_[i] = t.uv;
+      from_[i] = t.px;
       to_[i] = t.uv;
       if (turning_) {
         const V2 x = normalised(t.uv);
@@ -745,6 +786,8 @@ class MonoSlam {
         if (!guessed[i]) to_[i] = Vec2f(to_[i](0) + mx, to_[i](1) + my);
       }
     }
+    // The guesses are geometric positions; KLT looks in the image.
+    for (std::size_t i = 0; i < tracks_.size(); ++i) to_[i] = rollingShutterShift(to_[i], Scalar(-1));
     trackKlt(prevPyr_, curPyr_, from_, to_, ok_, opt_.klt);
     std::size_t w = 0;
     const float margin = float(opt_.klt.halfWindow + 1);
@@ -753,10 +796,12 @@ class MonoSlam {
       if (!ok_[i] || !insideImage(to_[i], margin) || masked(to_[i])) continue;
       prevUv_.push_back(tracks_[i].uv);
       if (w != i) tracks_[w] = std::move(tracks_[i]);  // (a self-move would empty kfObs)
-      tracks_[w].uv = to_[i];
+      tracks_[w].px = to_[i];
+      tracks_[w].uv = rollingShutterShift(to_[i], Scalar(1));
       ++w;
     }
     tracks_.resize(w);
+    rsOmegaNext_ = rsRate();
   }
 
   /// New tracks in the empty cells of the bucketing grid (never on the dilated hand mask).
@@ -764,14 +809,15 @@ class MonoSlam {
     const int want = opt_.maxFeatures - static_cast<int>(tracks_.size());
     if (want <= 0) return;
     existing_.clear();
-    for (const Track& t : tracks_) existing_.push_back(t.uv);
+    for (const Track& t : tracks_) existing_.push_back(t.px);
     fresh_.clear();
     detectCorners(curPyr_.level(0), hasMask_ ? &curMask_ : nullptr, existing_, want, opt_.corners, fresh_, cornerScratch_);
     for (const Vec2f& p : fresh_) {
       Track t;
       t.id = static_cast<int>(trackPoint_.size());
       trackPoint_.push_back(-1);
-      t.uv = p;
+      t.px = p;
+      t.uv = rollingShutterShift(p, Scalar(1));
       tracks_.push_back(std::move(t));
     }
   }
@@ -1569,7 +1615,8 @@ class MonoSlam {
         Track t;
         t.id = static_cast<int>(trackPoint_.size());
         trackPoint_.push_back(pids[i]);
-        t.uv = to[i];
+        t.px = to[i];
+        t.uv = rollingShutterShift(to[i], Scalar(1));
         t.point = pids[i];
         if (withPrev) {
           // Its position in the previous frame (for the ray rotation): the projection there.
@@ -2489,6 +2536,8 @@ class MonoSlam {
   bool focalAttempted_ = false;
   FocalRefineResult<Scalar> focal_;
   SE3T predicted_;
+  V3 rsOmega_ = V3::Zero();      ///< this frame's rotation per frame for the rolling shutter (camera axes)
+  V3 rsOmegaNext_ = V3::Zero();  ///< the last step's, from the raw pixels (rsRate)
   bool havePrediction_ = false;
   bool turning_ = false;
   int turnUntil_ = -1;

@@ -39,6 +39,10 @@
 //                                        default focal; declined when the motion does not
 //                                        determine it); when refined, the hands are re-fitted
 //           focalPriorSigma? (0.3)       the prior's std of log f (user focal: 0.1 by default)
+//           readout? (0)                 rolling shutter: seconds from the first row's exposure
+//                                        to the last's (0: global shutter; at most 1 / fps); the
+//                                        SLAM brings its points to the middle row's time under
+//                                        the head's rotation (SlamOptions::rollingShutter)
 //           focalMaxPasses? (4)          SLAM passes at most (see focalRerunBytes)
 //           focalRerunBytes? (256 MB)    the SLAM's grey frames and masks are kept up to this
 //                                        size; when the focal was refined and they were kept, the
@@ -354,6 +358,10 @@ export async function runPipeline(source, options, hooks = {}) {
     throw new Error(`runPipeline: frames of ${width}x${height} (${(width * height / 1e6).toFixed(1)} Mpx) exceed the limit of ${(maxPixels / 1e6).toFixed(1)} Mpx; downscale the video first (e.g. to 1920 px wide)`);
   }
   if (!(Number.isFinite(fps) && fps > 0)) throw new Error(`runPipeline: bad fps ${source.fps}`);
+  const readout = options.readout ?? 0;
+  if (!(Number.isFinite(readout) && readout >= 0 && readout <= 1 / fps)) {
+    throw new Error(`runPipeline: the rolling-shutter readout ${options.readout} s must lie between 0 and the frame interval (${(1 / fps).toFixed(4)} s)`);
+  }
   if (options.eyeHeight !== undefined && eyeHeightError(options.eyeHeight)) throw new Error(`runPipeline: ${eyeHeightError(options.eyeHeight)}`);
   if (!source.frames || typeof source.frames[Symbol.asyncIterator] !== 'function' && typeof source.frames[Symbol.iterator] !== 'function') {
     throw new Error('runPipeline: source.frames must be an (async) iterable of { index, rgba }');
@@ -457,7 +465,7 @@ export async function runPipeline(source, options, hooks = {}) {
 
     const refineFocal = options.refineFocal ?? true;
     const focalPriorSigma = options.focalPriorSigma ?? (intr.focalSource === 'user-focal' ? 0.1 : 0.3);
-    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true, refineFocal, focalPriorSigma });
+    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true, refineFocal, focalPriorSigma, rollingShutter: readout * fps });
     const rerunBytes = options.focalRerunBytes ?? 256 * 1024 * 1024;
     let keptSlam = refineFocal && rerunBytes > 0 ? { frames: [], masks: [], bytes: 0 } : null;
     owned.push(slam);
@@ -581,7 +589,7 @@ export async function runPipeline(source, options, hooks = {}) {
     t1 = now();
     while (last && last.changed && keptSlam && keptSlam.frames.length === T && focalPasses < maxPasses) {
       checkAbort(signal);
-      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma, focalPriorFx: Ks[0] });
+      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma, focalPriorFx: Ks[0], rollingShutter: readout * fps });
       owned.push(slam2);
       for (let t = 0; t < T; ++t) slam2.process(keptSlam.frames[t], keptSlam.masks[t]);
       const traj2 = slam2.finish();
@@ -607,7 +615,7 @@ export async function runPipeline(source, options, hooks = {}) {
     const intrOut = { ...intr, guessSource: intr.focalSource, guessFx: intr.fx, refined: false, focalPasses,
       focalStd: fr && fr.accepted && Number.isFinite(fr.stdLog) ? fr.stdLog : null,
       focalEstimateFx: fr && fr.estimateFx > 0 ? fr.estimateFx / sx : null,
-      focalReason: !refineFocal ? 'off' : (fr ? fr.reason : 'not run') };
+      focalReason: !refineFocal ? 'off' : (fr ? fr.reason : 'not run'), readout };
     if (fr && fr.changed) {
       intrOut.fx = fr.fx / sx;
       intrOut.fy = fr.fy / sy;
