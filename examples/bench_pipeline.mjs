@@ -5,7 +5,7 @@
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
 //        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
-//        [--tracker JSON] [--capture clean,phone,...]
+//        [--tracker JSON] [--capture clean,phone,...] [--readout]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -31,7 +31,8 @@
 // blur, rolling shutter, noise, exposure drift, the lens) and encoded as the profile's
 // capture.json says, one row per profile; the pipeline gets the lens (options.camera) and the
 // true focal at the video's size; 'none' is the default CRF 12 video. Simulated observations
-// are pinhole projections (use them without a lens). Each row also has handDepth per hand: the median ratio of the fitted
+// are pinhole projections (use them without a lens). --readout: the pipeline also gets the
+// profile's rolling-shutter readout (capture.json's readout_s; runPipeline's options.readout). Each row also has handDepth per hand: the median ratio of the fitted
 // camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
 // fitted and the true depth (what the hand-anchored scale has to work with).
 // Timing: median over sequences of each stage's ms per frame.
@@ -73,6 +74,7 @@ function parse(argv) {
     else if (a === '--mask-dilate') o.maskDilate = Number(v());
     else if (a === '--tracker') o.tracker = JSON.parse(v());
     else if (a === '--capture') o.captures = v().split(',');
+    else if (a === '--readout') o.readout = true;
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
     else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
@@ -124,7 +126,8 @@ export function makeSequence(hawor, preset, seed, frames, size, dir, options = {
   const cj = join(dir, 'capture.json');
   const enc = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).encode : null;
   const videoWidth = enc && enc.width ? enc.width : W, videoHeight = enc && enc.height ? enc.height : H;
-  return { dir, fx, fy, cx, cy, W, H, fps, lens: lensLine ? lensLine.slice(5).trim() : 'pinhole', videoWidth, videoHeight };
+  const readout = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).readout_s ?? 0 : 0;
+  return { dir, fx, fy, cx, cy, W, H, fps, lens: lensLine ? lensLine.slice(5).trim() : 'pinhole', videoWidth, videoHeight, readout };
 }
 
 /** fx, fy, cx, cy of a sequence at its video's size (pixel centres at integers). */
@@ -274,6 +277,7 @@ async function main() {
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
           ...(o.tracker ? { tracker: o.tracker } : {}),
           ...(seq.lens !== 'pinhole' ? { camera: seq.lens } : {}),
+          ...(o.readout ? { readout: seq.readout } : {}),
           ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * fxVideo)) * 180) / Math.PI } : { focalPx: fxVideo }) };
         if (mode.startsWith('simulated')) options.observations = simulatedObservations(gt, seq, info.frameCount, o.noisePx, o.noiseMm, 1000 + seed);
         if (mode.endsWith('+depth')) options.depthModel = noisyTrueDepth(seq, 2000 + seed);
@@ -284,7 +288,7 @@ async function main() {
         const T = result.frameCount;
         const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
         const row = {
-          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
+          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}${o.readout && seq.readout > 0 ? ` (readout ${1000 * seq.readout} ms)` : ''}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
           focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: fxVideo, focalRefined: result.intrinsics.refined,
           focalStd: result.intrinsics.focalStd, focalEstimate: result.intrinsics.focalEstimateFx, focalReason: result.intrinsics.focalReason,
           found: `${ev.perHand.left.observed + ev.perHand.right.observed}/${ev.perHand.left.inView + ev.perHand.right.inView}`,
