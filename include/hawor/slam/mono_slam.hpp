@@ -12,6 +12,8 @@
 //      20° ≈ 140 px a frame; looking around and walking stay below 3.5°), every track is also
 //      started at its ray rotated by a constant-angular-velocity prediction (the infinite
 //      homography), the rotation coming from the map or, without a map pose, from the rays.
+//      ROLLING SHUTTER (rollingShutter > 0): the tracked pixels stay raw for KLT; the geometry
+//      sees them moved to the middle row's time under the last frame's raw-pixel rotation.
 //   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
 //      between a reference frame and the current one once the median flow is large enough; the
 //      reference is the oldest of the last initMaxGap frames sharing initMinTracks tracks (their
@@ -156,12 +158,11 @@ struct SlamOptions {
   CornerOptions corners;
   int maxFeatures = 350;            ///< live tracks after replenishing at a keyframe
   /// Rolling shutter: the readout time from the first row to the last as a fraction of the frame
-  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.6–0.9; 0: a global shutter).
-  /// Row v is exposed (v − (H−1)/2)/H · readout frames after the middle row; under the head's
-  /// angular velocity ω (rotation vector per frame, camera axes, from the last two frames:
-  /// R(t+δ) = R(t)·exp(δω)) the ray seen on row v is brought to the middle row's time,
-  /// b ← exp(δω)·b, before any geometry uses it (KLT keeps the raw pixels). Translation during
-  /// the readout is neglected (a head moves ~1 cm in 25 ms).
+  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.45–0.9; 0: a global shutter).
+  /// Row v is exposed (v − (H−1)/2)/H · readout frames after the middle row; each tracked point
+  /// is brought to the middle row's time, b ← exp(δω)·b, with ω the last frame's rotation fitted
+  /// to the raw pixels (rsRate), before any geometry uses it; KLT keeps the raw pixels. The
+  /// translation during the readout is neglected (docs/design.md §11).
   Scalar rollingShutter = Scalar(0);
   bool useMasks = true;             ///< dual hand masking (false: masks are ignored, the ablation)
   int maskDilatePx = 6;             ///< front-end dilation of the hand mask
