@@ -115,7 +115,7 @@ function onWorker(m, resolveReady) {
 function errorText(kind, message) {
   const prefix = { mano: 'Wrong MANO file', short: 'Clip too short', nohands: 'No hands found', video: 'Unsupported or corrupt video',
     resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem',
-    'eye-height': 'Wrong camera height', camera: 'Wrong camera model' }[kind];
+    'eye-height': 'Wrong camera height', camera: 'Wrong camera model', readout: 'Wrong rolling-shutter readout' }[kind];
   return prefix ? `${prefix}: ${message}` : message;
 }
 
@@ -168,6 +168,11 @@ async function processVideo(url, name, sampleMeta = null) {
     else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
     const camera = $('opt-camera').value.trim();
     if (camera) options.camera = camera;  // checked by the core in the worker (Lens::parse, CameraModel::validate)
+    const readoutMs = number('opt-readout');
+    if (readoutMs) {
+      if (!(readoutMs > 0 && readoutMs <= 1000 / fps)) throw new InputError('readout', `${readoutMs} ms is not between 0 and the frame interval (${(1000 / fps).toFixed(1)} ms at ${fps} fps).`);
+      options.readout = readoutMs / 1000;
+    }
     const eye = number('opt-eyeheight');
     if (eye) {
       const bad = eyeHeightError(eye);
@@ -182,7 +187,8 @@ async function processVideo(url, name, sampleMeta = null) {
     run.meta = { width: size.width, height: size.height, fps, frameCount, original: meta };
     ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}`
       + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default')
-      + (options.camera ? `, camera model ${options.camera}` : '');
+      + (options.camera ? `, camera model ${options.camera}` : '')
+      + (options.readout ? `, rolling shutter ${1000 * options.readout} ms` : '');
     app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount }, options });
     run.started = true;
     const wait = () => new Promise((resolve) => {

@@ -165,6 +165,7 @@ async function start(meta, options) {
     if (options.fovDeg) opts.fovDeg = options.fovDeg;
     if (options.eyeHeight) opts.eyeHeight = options.eyeHeight;
     if (options.camera) opts.camera = options.camera;
+    if (options.readout) opts.readout = options.readout;
     if (options.depth) opts.depthModel = { bytes: new Uint8Array(options.depth.bytes), config: options.depth.config };
     const hooks = {
       signal: controller.signal,
