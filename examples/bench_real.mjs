@@ -442,7 +442,7 @@ function runPipelineCli(file, outDir, o) {
   });
 }
 
-async function pool(items, jobs, fn) {
+export async function pool(items, jobs, fn) {
   const out = new Array(items.length);
   let next = 0;
   const worker = async () => {

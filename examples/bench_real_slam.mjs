@@ -33,7 +33,7 @@ import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { deflateSync, inflateSync } from 'node:zlib';
 
-import { VARIANTS, origFrame, segmentsOf, scoreCamera } from './bench_real.mjs';
+import { VARIANTS, origFrame, segmentsOf, scoreCamera, pool } from './bench_real.mjs';
 import { crc32 } from '../web/tools/npz.mjs';
 
 const repo = resolve(dirname(fileURLToPath(import.meta.url)), '..');
@@ -193,19 +193,6 @@ async function runSlamWasm(o, dir, meta) {
   writeFileSync(join(out, 'stats.json'), JSON.stringify({ status: Array.from(r.status, (s) => names[s]) }));
   ms.sort((a, b) => a - b);
   return { code: 0, summary: { resets: r.numResets, median_ms_per_frame: ms[Math.floor(ms.length / 2)] } };
-}
-
-async function pool(items, jobs, fn) {
-  const out = new Array(items.length);
-  let next = 0;
-  const worker = async () => {
-    while (next < items.length) {
-      const k = next++;
-      out[k] = await fn(items[k], k);
-    }
-  };
-  await Promise.all(Array.from({ length: Math.max(1, jobs) }, worker));
-  return out;
 }
 
 const STATUS = { tracked: 0, interpolated: 1, lost: 2, relocalised: 3 };
