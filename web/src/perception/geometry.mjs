@@ -52,6 +52,40 @@ export function letterboxRoi(width, height) {
 }
 
 /**
+ * One bilinear sample of an 8-bit RGB(A) image at (x, y) (pixel centres at integers) into
+ * out[o..o+2] as RGB in 0..1; a neighbour outside the image reads black, or (replicate) the
+ * nearest edge pixel.
+ */
+function sampleBilinear(data, W, H, ch, x, y, replicate, out, o) {
+  const xf = Math.floor(x);
+  const yf = Math.floor(y);
+  const fx = x - xf;
+  const fy = y - yf;
+  let r = 0;
+  let g = 0;
+  let b = 0;
+  for (let q = 0; q < 4; ++q) {
+    let xx = xf + (q & 1);
+    let yy = yf + (q >> 1);
+    if (xx < 0 || yy < 0 || xx >= W || yy >= H) {
+      if (!replicate) continue;
+      xx = Math.min(Math.max(xx, 0), W - 1);
+      yy = Math.min(Math.max(yy, 0), H - 1);
+    }
+    const wgt = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
+    if (wgt === 0) continue;
+    const i = (yy * W + xx) * ch;
+    r += wgt * data[i];
+    g += wgt * data[i + 1];
+    b += wgt * data[i + 2];
+  }
+  const k = 1 / 255;
+  out[o] = r * k;
+  out[o + 1] = g * k;
+  out[o + 2] = b * k;
+}
+
+/**
  * Samples an N x N (or outW x outH) crop of `image` over `roi`, bilinearly, into NHWC float RGB
  * in 0..1 (what the MediaPipe networks take). Outside the image: `border` 'zero' reads black
  * (MediaPipe's palm letterbox), 'replicate' the nearest edge pixel (MediaPipe's default, used for
@@ -78,39 +112,11 @@ export function cropImage(image, roi, outW, outH = outW, out = new Float32Array(
   const v0 = 0.5 / outH - 0.5;
   const x00 = roi.cx + u0 * roi.w * c - v0 * roi.h * s;
   const y00 = roi.cy + u0 * roi.w * s + v0 * roi.h * c;
-  const k = 1 / 255;
   let o = 0;
   for (let j = 0; j < outH; ++j) {
     let x = x00 + j * dxj;
     let y = y00 + j * dyj;
-    for (let i = 0; i < outW; ++i, x += dxi, y += dyi, o += 3) {
-      const xf = Math.floor(x);
-      const yf = Math.floor(y);
-      const fx = x - xf;
-      const fy = y - yf;
-      let r = 0;
-      let g = 0;
-      let b = 0;
-      // the four neighbours, each skipped when outside (zero border)
-      for (let q = 0; q < 4; ++q) {
-        let xx = xf + (q & 1);
-        let yy = yf + (q >> 1);
-        if (xx < 0 || yy < 0 || xx >= W || yy >= H) {
-          if (!replicate) continue;
-          xx = Math.min(Math.max(xx, 0), W - 1);
-          yy = Math.min(Math.max(yy, 0), H - 1);
-        }
-        const wgt = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
-        if (wgt === 0) continue;
-        const p = (yy * W + xx) * ch;
-        r += wgt * data[p];
-        g += wgt * data[p + 1];
-        b += wgt * data[p + 2];
-      }
-      out[o] = r * k;
-      out[o + 1] = g * k;
-      out[o + 2] = b * k;
-    }
+    for (let i = 0; i < outW; ++i, x += dxi, y += dyi, o += 3) sampleBilinear(data, W, H, ch, x, y, replicate, out, o);
   }
   return out;
 }
@@ -130,37 +136,11 @@ export function cropImageMapped(image, map, outW, outH = outW, out = new Float32
   if (data.length < W * H * ch) throw new Error(`cropImageMapped: ${data.length} bytes for a ${W}x${H}x${ch} image`);
   if (map.length !== 2 * outW * outH) throw new Error(`cropImageMapped: a map of ${map.length} numbers for ${outW}x${outH}`);
   if (out.length !== outW * outH * 3) throw new Error(`cropImageMapped: output of ${out.length} floats for ${outW}x${outH}x3`);
-  const k = 1 / 255;
   for (let p = 0, o = 0; p < outW * outH; ++p, o += 3) {
     const x = map[2 * p];
     const y = map[2 * p + 1];
-    let r = 0;
-    let g = 0;
-    let b = 0;
-    if (Number.isFinite(x) && Number.isFinite(y)) {
-      const xf = Math.floor(x);
-      const yf = Math.floor(y);
-      const fx = x - xf;
-      const fy = y - yf;
-      for (let q = 0; q < 4; ++q) {
-        let xx = xf + (q & 1);
-        let yy = yf + (q >> 1);
-        if (xx < 0 || yy < 0 || xx >= W || yy >= H) {
-          if (!replicate) continue;
-          xx = Math.min(Math.max(xx, 0), W - 1);
-          yy = Math.min(Math.max(yy, 0), H - 1);
-        }
-        const wgt = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
-        if (wgt === 0) continue;
-        const i = (yy * W + xx) * ch;
-        r += wgt * data[i];
-        g += wgt * data[i + 1];
-        b += wgt * data[i + 2];
-      }
-    }
-    out[o] = r * k;
-    out[o + 1] = g * k;
-    out[o + 2] = b * k;
+    if (Number.isFinite(x) && Number.isFinite(y)) sampleBilinear(data, W, H, ch, x, y, replicate, out, o);
+    else out[o] = out[o + 1] = out[o + 2] = 0;
   }
   return out;
 }
