@@ -124,9 +124,10 @@ export function makeSequence(hawor, preset, seed, frames, size, dir, options = {
   const [fx, fy, cx, cy, W, H, fps] = lines[0].trim().split(/\s+/).map(Number);
   const lensLine = lines.slice(1).find((l) => l.startsWith('lens '));
   const cj = join(dir, 'capture.json');
-  const enc = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).encode : null;
+  const cap = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')) : null;
+  const enc = cap ? cap.encode : null;
   const videoWidth = enc && enc.width ? enc.width : W, videoHeight = enc && enc.height ? enc.height : H;
-  const readout = existsSync(cj) ? JSON.parse(readFileSync(cj, 'utf8')).readout_s ?? 0 : 0;
+  const readout = cap ? cap.readout_s ?? 0 : 0;
   return { dir, fx, fy, cx, cy, W, H, fps, lens: lensLine ? lensLine.slice(5).trim() : 'pinhole', videoWidth, videoHeight, readout };
 }
 
