@@ -19,6 +19,7 @@
 #include "hawor/render/rectify.hpp"
 #include "hawor/render/resample.hpp"
 #include "hawor/slam/mono_slam.hpp"
+#include "hawor/slam/slam_option_table.hpp"
 
 namespace hawor_cli {
 namespace {
@@ -27,7 +28,7 @@ const char* kSlamHelp =
     "usage: hawor slam --images DIR --intrinsics fx,fy,cx,cy [--camera LENS] [--masks DIR]\n"
     "                  [--no-mask] --out TRAJ.tum [--keyframe-depths KD.npz] [--stats STATS.json]\n"
     "                  [--fps F] [--readout S] [--max-frames N] [--refine-focal [--focal-prior S]]\n"
-    "                  [--verbose]\n"
+    "                  [--set NAME=VALUE,...] [--verbose]\n"
     "\n"
     "Sparse monocular SLAM (KLT tracks, PnP, keyframes, sliding-window and global bundle\n"
     "adjustment) with the hands masked out of the front end and the bundle adjustment.\n"
@@ -61,6 +62,9 @@ const char* kSlamHelp =
     "                        adjustment where the motion determines it; the --intrinsics focal\n"
     "                        is the guess (the trajectory then uses the refined focal)\n"
     "  --focal-prior S       std of log(f / guess) of the guess (default 0.3, a FOV guess)\n"
+    "  --set NAME=VALUE,...  set SlamOptions fields by name, for ablations (for example\n"
+    "                        --set initMinRotationDeg=90,relocalise=false; twoView.NAME for\n"
+    "                        the initialisation's); an unknown name lists the known ones\n"
     "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
     "                        PnP, keyframes, losses)\n"
     "\n"
@@ -96,7 +100,7 @@ bool fileExists(const std::string& p) {
 int cmdSlam(int argc, char** argv) {
   const Args args(argc, argv, 2,
                   {"images", "intrinsics", "camera", "masks", "out", "keyframe-depths", "stats", "fps", "readout", "max-frames",
-                   "focal-prior"},
+                   "focal-prior", "set"},
                   {"no-mask", "verbose", "refine-focal"});
   if (args.help()) {
     std::fputs(kSlamHelp, stdout);
@@ -137,6 +141,11 @@ int cmdSlam(int argc, char** argv) {
     if (!opt.refineFocal) throw UsageError("--focal-prior needs --refine-focal");
     opt.focal.priorSigmaLog = args.number("focal-prior", 0.3);
     if (!(opt.focal.priorSigmaLog > 0)) throw UsageError("--focal-prior must be > 0");
+  }
+  try {
+    hawor::setSlamOptions(opt, args.get("set", ""));
+  } catch (const hawor::Error& e) {
+    throw UsageError(std::string("--set: ") + (e.what() + 7));  // without "hawor: "
   }
   const bool verbose = args.flag("verbose");
   if (verbose) opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };

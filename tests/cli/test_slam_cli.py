@@ -3,11 +3,15 @@ without masks; the trajectory against the ground truth (Sim(3) Umeyama written h
 mean error as in docs/design.md §8), the TUM layout (first pose the identity, timestamps frame/fps),
 the keyframe-depth npz against the rendered depth maps (up to the same Sim(3) scale), the stats
 JSON, --refine-focal from a wrong and a right guess; and bad input: a missing folder, too few frames, a corrupt image, frames of different sizes,
-a mask of the wrong size, bad intrinsics (clear message, exit code 1 or 2, no crash).
+a mask of the wrong size, bad intrinsics (clear message, exit code 1 or 2, no crash). `--set NAME=VALUE`:
+the names it knows against the option structs' declarations parsed here from the headers (every
+numeric and boolean field settable), a setting taking effect (`--set useMasks=false` gives the
+`--no-mask` trajectory to the bit), and malformed settings refused.
 Run: /usr/bin/python3 test_slam_cli.py path/to/hawor
 """
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -43,6 +47,47 @@ def umeyama(src, dst):
     r = u @ sgn @ vt
     s = np.trace(np.diag(d) @ sgn) / (a * a).sum() * len(src)
     return s, r, md - s * r @ ms
+
+
+def declared_options():
+    """The int/Scalar/float/bool fields of SlamOptions and of its nested front-end option structs,
+    parsed from the headers: what `--set` must accept."""
+    inc = os.path.join(os.path.dirname(__file__), "..", "..", "include", "hawor", "slam")
+
+    def fields(header, struct, end):
+        text = open(os.path.join(inc, header)).read()
+        body = text[text.index("struct %s {" % struct):]
+        body = body[:body.index(end)]
+        return re.findall(r"^\s+(?:int|Scalar|float|bool)\s+(\w+)\s*=", body, re.M)
+
+    names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
+    for prefix, header, struct in (("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
+                                   ("twoView", "two_view.hpp", "TwoViewOptions"),
+                                   ("pnp", "pnp_ransac.hpp", "PnPRansacOptions")):
+        names |= {prefix + "." + n for n in fields(header, struct, "};")}
+    return names
+
+
+def check_set_option(seq, intr, tmp):
+    rgb, masks = os.path.join(seq, "rgb"), os.path.join(seq, "mask")
+    base = ["slam", "--images", rgb, "--intrinsics", intr, "--max-frames", "30"]
+    rc, _, err = run(*base, "--out", os.path.join(tmp, "s.tum"), "--set", "noSuchOption=1")
+    check("--set unknown name", rc == 2 and "noSuchOption" in err and "known:" in err, err)
+    known = set(err.split("known: ", 1)[1].split(")", 1)[0].split(", ")) if "known: " in err else set()
+    declared = declared_options()
+    check("--set knows every declared option", known == declared,
+          ("missing", sorted(declared - known), "extra", sorted(known - declared)))
+    for bad, word in (("minInliers=2.5", "integer"), ("useMasks=yes", "true"), ("initMinFlowPx=nan", "number"),
+                      ("klt.maxResidual=", "number"), ("minInliers", "NAME=VALUE"), ("=3", "NAME=VALUE")):
+        rc, _, err = run(*base, "--out", os.path.join(tmp, "s.tum"), "--set", bad)
+        check("--set %s refused" % bad, rc == 2 and word in err, err)
+    outs = []
+    for extra in (["--no-mask"], ["--set", "useMasks=false,minInliers=25"]):
+        traj = os.path.join(tmp, "set%d.tum" % len(outs))
+        rc, _, err = run(*base, "--masks", masks, "--out", traj, *extra)
+        check("--set run %s" % extra, rc == 0, err)
+        outs.append(open(traj).read() if rc == 0 else None)
+    check("--set useMasks=false is --no-mask", outs[0] is not None and outs[0] == outs[1])
 
 
 def main():
@@ -118,6 +163,8 @@ def main():
             else:
                 check("wrong focal refined", sm["focal_refined"] and abs(sm["focal_fx"] / float(k[0]) - 1) < 0.1 and
                       0 < sm["focal_std"] < 0.05, out)
+
+        check_set_option(seq, intr, tmp)
 
         # Bad input.
         out_tum = os.path.join(tmp, "x.tum")

@@ -24,3 +24,4 @@
 #include "sequence_refine.hpp"
 #include "head_motion.hpp"
 #include "mono_slam.hpp"
+#include "slam_option_table.hpp"

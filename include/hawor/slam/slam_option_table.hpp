@@ -1,0 +1,247 @@
+// hawor/slam/slam_option_table.hpp — SlamOptions by name: `setSlamOption(options, "initMinTracks",
+// "40")`, for tools that try a setting without a rebuild (`hawor slam --set NAME=VALUE,...`, the
+// SLAM benchmarks' ablations). The numeric and boolean fields of SlamOptions and of its
+// front end's and initialisation's option structs (corners.NAME, klt.NAME, twoView.NAME,
+// pnp.NAME); values are checked (an integer for an int, a finite number,
+// true/false/1/0 for a bool) and an unknown name is an error that lists the known ones.
+#pragma once
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "../common.hpp"
+#include "mono_slam.hpp"
+
+namespace hawor {
+namespace slam_option_detail {
+
+template <typename O, typename T>
+using Field = std::pair<const char*, T& (*)(O&)>;
+
+template <typename Scalar>
+const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
+  using O = SlamOptions<Scalar>;
+  using T = int;
+  static const std::vector<Field<O, T>> f = {
+      {"pyramidLevels", [](O& o) -> T& { return o.pyramidLevels; }},
+      {"maxFeatures", [](O& o) -> T& { return o.maxFeatures; }},
+      {"maskDilatePx", [](O& o) -> T& { return o.maskDilatePx; }},
+      {"maskBlock", [](O& o) -> T& { return o.maskBlock; }},
+      {"initEveryFrames", [](O& o) -> T& { return o.initEveryFrames; }},
+      {"initMinTracks", [](O& o) -> T& { return o.initMinTracks; }},
+      {"reinitMinTracks", [](O& o) -> T& { return o.reinitMinTracks; }},
+      {"initMaxGap", [](O& o) -> T& { return o.initMaxGap; }},
+      {"minInliers", [](O& o) -> T& { return o.minInliers; }},
+      {"turnHoldFrames", [](O& o) -> T& { return o.turnHoldFrames; }},
+      {"minTurnInliers", [](O& o) -> T& { return o.minTurnInliers; }},
+      {"maxBridgeFrames", [](O& o) -> T& { return o.maxBridgeFrames; }},
+      {"lostFramesBeforeReset", [](O& o) -> T& { return o.lostFramesBeforeReset; }},
+      {"coastFrames", [](O& o) -> T& { return o.coastFrames; }},
+      {"refindKeyframes", [](O& o) -> T& { return o.refindKeyframes; }},
+      {"refindBelow", [](O& o) -> T& { return o.refindBelow; }},
+      {"refindMaxPoints", [](O& o) -> T& { return o.refindMaxPoints; }},
+      {"turnScaleLag", [](O& o) -> T& { return o.turnScaleLag; }},
+      {"turnScaleMinWindows", [](O& o) -> T& { return o.turnScaleMinWindows; }},
+      {"revisitMinFrames", [](O& o) -> T& { return o.revisitMinFrames; }},
+      {"revisitMaxPoints", [](O& o) -> T& { return o.revisitMaxPoints; }},
+      {"revisitMinInliers", [](O& o) -> T& { return o.revisitMinInliers; }},
+      {"relocKeyframes", [](O& o) -> T& { return o.relocKeyframes; }},
+      {"relocSpacing", [](O& o) -> T& { return o.relocSpacing; }},
+      {"linkMaxPoints", [](O& o) -> T& { return o.linkMaxPoints; }},
+      {"linkMinInliers", [](O& o) -> T& { return o.linkMinInliers; }},
+      {"linkYawSteps", [](O& o) -> T& { return o.linkYawSteps; }},
+      {"linkEveryFrames", [](O& o) -> T& { return o.linkEveryFrames; }},
+      {"linkEnough", [](O& o) -> T& { return o.linkEnough; }},
+      {"relocAnchors", [](O& o) -> T& { return o.relocAnchors; }},
+      {"relocMaxPoints", [](O& o) -> T& { return o.relocMaxPoints; }},
+      {"relocMinInliers", [](O& o) -> T& { return o.relocMinInliers; }},
+      {"joinMinTracks", [](O& o) -> T& { return o.joinMinTracks; }},
+      {"keyframeMinInliers", [](O& o) -> T& { return o.keyframeMinInliers; }},
+      {"keyframeMaxInterval", [](O& o) -> T& { return o.keyframeMaxInterval; }},
+      {"keyframeMinInterval", [](O& o) -> T& { return o.keyframeMinInterval; }},
+      {"keyframeThinInterval", [](O& o) -> T& { return o.keyframeThinInterval; }},
+      {"windowKeyframes", [](O& o) -> T& { return o.windowKeyframes; }},
+      {"localIterations", [](O& o) -> T& { return o.localIterations; }},
+      {"globalIterations", [](O& o) -> T& { return o.globalIterations; }},
+      {"focalMaxFrames", [](O& o) -> T& { return o.focalMaxFrames; }},
+      {"focalFrameSpacing", [](O& o) -> T& { return o.focalFrameSpacing; }},
+      {"corners.cellSize", [](O& o) -> T& { return o.corners.cellSize; }},
+      {"corners.maxPerCell", [](O& o) -> T& { return o.corners.maxPerCell; }},
+      {"corners.minDistance", [](O& o) -> T& { return o.corners.minDistance; }},
+      {"corners.border", [](O& o) -> T& { return o.corners.border; }},
+      {"corners.boxRadius", [](O& o) -> T& { return o.corners.boxRadius; }},
+      {"klt.halfWindow", [](O& o) -> T& { return o.klt.halfWindow; }},
+      {"klt.maxIterations", [](O& o) -> T& { return o.klt.maxIterations; }},
+      {"twoView.maxIterations", [](O& o) -> T& { return o.twoView.maxIterations; }},
+      {"twoView.minTriangulated", [](O& o) -> T& { return o.twoView.minTriangulated; }},
+      {"twoView.minThirdView", [](O& o) -> T& { return o.twoView.minThirdView; }},
+      {"twoView.refineIterations", [](O& o) -> T& { return o.twoView.refineIterations; }},
+      {"pnp.maxIterations", [](O& o) -> T& { return o.pnp.maxIterations; }},
+      {"pnp.minIterations", [](O& o) -> T& { return o.pnp.minIterations; }},
+      {"pnp.minInliers", [](O& o) -> T& { return o.pnp.minInliers; }},
+  };
+  return f;
+}
+
+template <typename Scalar>
+const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
+  using O = SlamOptions<Scalar>;
+  using T = Scalar;
+  static const std::vector<Field<O, T>> f = {
+      {"rollingShutter", [](O& o) -> T& { return o.rollingShutter; }},
+      {"initMinFlowPx", [](O& o) -> T& { return o.initMinFlowPx; }},
+      {"initMinRotationDeg", [](O& o) -> T& { return o.initMinRotationDeg; }},
+      {"turnRateDeg", [](O& o) -> T& { return o.turnRateDeg; }},
+      {"turnRotationAgreementDeg", [](O& o) -> T& { return o.turnRotationAgreementDeg; }},
+      {"bridgeMinParallaxDeg", [](O& o) -> T& { return o.bridgeMinParallaxDeg; }},
+      {"coastMaxStepDeg", [](O& o) -> T& { return o.coastMaxStepDeg; }},
+      {"maxRayJumpDeg", [](O& o) -> T& { return o.maxRayJumpDeg; }},
+      {"refindMaxShiftPx", [](O& o) -> T& { return o.refindMaxShiftPx; }},
+      {"turnScaleMinAngleDeg", [](O& o) -> T& { return o.turnScaleMinAngleDeg; }},
+      {"turnScaleMaxSpread", [](O& o) -> T& { return o.turnScaleMaxSpread; }},
+      {"revisitMaxAngleDeg", [](O& o) -> T& { return o.revisitMaxAngleDeg; }},
+      {"revisitMaxShiftPx", [](O& o) -> T& { return o.revisitMaxShiftPx; }},
+      {"revisitMaxRotationDeg", [](O& o) -> T& { return o.revisitMaxRotationDeg; }},
+      {"linkMaxShiftPx", [](O& o) -> T& { return o.linkMaxShiftPx; }},
+      {"linkYawStepDeg", [](O& o) -> T& { return o.linkYawStepDeg; }},
+      {"linkAgreeDeg", [](O& o) -> T& { return o.linkAgreeDeg; }},
+      {"relocAnchorDeg", [](O& o) -> T& { return o.relocAnchorDeg; }},
+      {"relocAnchorDepths", [](O& o) -> T& { return o.relocAnchorDepths; }},
+      {"relocMaxShiftPx", [](O& o) -> T& { return o.relocMaxShiftPx; }},
+      {"relocMaxRotationDeg", [](O& o) -> T& { return o.relocMaxRotationDeg; }},
+      {"joinMaxScaleStd", [](O& o) -> T& { return o.joinMaxScaleStd; }},
+      {"keyframeInlierRatio", [](O& o) -> T& { return o.keyframeInlierRatio; }},
+      {"keyframeMaxRotationDeg", [](O& o) -> T& { return o.keyframeMaxRotationDeg; }},
+      {"minTriangulationDeg", [](O& o) -> T& { return o.minTriangulationDeg; }},
+      {"maxReprojPx", [](O& o) -> T& { return o.maxReprojPx; }},
+      {"focalMinStd", [](O& o) -> T& { return o.focalMinStd; }},
+      {"twoView.focalPx", [](O& o) -> T& { return o.twoView.focalPx; }},
+      {"twoView.sigmaPx", [](O& o) -> T& { return o.twoView.sigmaPx; }},
+      {"twoView.thresholdPx", [](O& o) -> T& { return o.twoView.thresholdPx; }},
+      {"twoView.confidence", [](O& o) -> T& { return o.twoView.confidence; }},
+      {"twoView.minParallaxDeg", [](O& o) -> T& { return o.twoView.minParallaxDeg; }},
+      {"twoView.minPointParallaxDeg", [](O& o) -> T& { return o.twoView.minPointParallaxDeg; }},
+      {"twoView.maxReprojPx", [](O& o) -> T& { return o.twoView.maxReprojPx; }},
+      {"twoView.minInFrontRatio", [](O& o) -> T& { return o.twoView.minInFrontRatio; }},
+      {"twoView.ambiguityRatio", [](O& o) -> T& { return o.twoView.ambiguityRatio; }},
+      {"twoView.essentialOverPlaneInliers", [](O& o) -> T& { return o.twoView.essentialOverPlaneInliers; }},
+      {"pnp.thresholdPx", [](O& o) -> T& { return o.pnp.thresholdPx; }},
+      {"pnp.confidence", [](O& o) -> T& { return o.pnp.confidence; }},
+  };
+  return f;
+}
+
+template <typename Scalar>
+const std::vector<Field<SlamOptions<Scalar>, float>>& floatFields() {
+  using O = SlamOptions<Scalar>;
+  using T = float;
+  static const std::vector<Field<O, T>> f = {
+      {"corners.minEigen", [](O& o) -> T& { return o.corners.minEigen; }},
+      {"klt.epsilon", [](O& o) -> T& { return o.klt.epsilon; }},
+      {"klt.minEigen", [](O& o) -> T& { return o.klt.minEigen; }},
+      {"klt.maxResidual", [](O& o) -> T& { return o.klt.maxResidual; }},
+      {"klt.maxFbError", [](O& o) -> T& { return o.klt.maxFbError; }},
+  };
+  return f;
+}
+
+template <typename Scalar>
+const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
+  using O = SlamOptions<Scalar>;
+  using T = bool;
+  static const std::vector<Field<O, T>> f = {
+      {"useMasks", [](O& o) -> T& { return o.useMasks; }},
+      {"fewPointsRayCheck", [](O& o) -> T& { return o.fewPointsRayCheck; }},
+      {"turnBridge", [](O& o) -> T& { return o.turnBridge; }},
+      {"joinOldMap", [](O& o) -> T& { return o.joinOldMap; }},
+      {"turnScaleJoin", [](O& o) -> T& { return o.turnScaleJoin; }},
+      {"headModelJoin", [](O& o) -> T& { return o.headModelJoin; }},
+      {"headModelJoinAll", [](O& o) -> T& { return o.headModelJoinAll; }},
+      {"headModelJoinBeforeRefine", [](O& o) -> T& { return o.headModelJoinBeforeRefine; }},
+      {"headModelPlaceShort", [](O& o) -> T& { return o.headModelPlaceShort; }},
+      {"relocalise", [](O& o) -> T& { return o.relocalise; }},
+      {"twoViewThirdView", [](O& o) -> T& { return o.twoViewThirdView; }},
+      {"revisitSearch", [](O& o) -> T& { return o.revisitSearch; }},
+      {"segmentLinks", [](O& o) -> T& { return o.segmentLinks; }},
+      {"globalBundleAdjustment", [](O& o) -> T& { return o.globalBundleAdjustment; }},
+      {"refineFrames", [](O& o) -> T& { return o.refineFrames; }},
+      {"sequenceRefine", [](O& o) -> T& { return o.sequenceRefine; }},
+      {"headModelFill", [](O& o) -> T& { return o.headModelFill; }},
+      {"refineFocal", [](O& o) -> T& { return o.refineFocal; }},
+      {"klt.forwardBackward", [](O& o) -> T& { return o.klt.forwardBackward; }},
+      {"twoView.essentialOverPlane", [](O& o) -> T& { return o.twoView.essentialOverPlane; }},
+      {"twoView.refine", [](O& o) -> T& { return o.twoView.refine; }},
+      {"pnp.refine", [](O& o) -> T& { return o.pnp.refine; }},
+  };
+  return f;
+}
+
+}  // namespace slam_option_detail
+
+/// Every settable name, in declaration order (ints, then numbers, then booleans).
+template <typename Scalar>
+std::vector<std::string> slamOptionNames() {
+  std::vector<std::string> n;
+  for (const auto& f : slam_option_detail::intFields<Scalar>()) n.emplace_back(f.first);
+  for (const auto& f : slam_option_detail::scalarFields<Scalar>()) n.emplace_back(f.first);
+  for (const auto& f : slam_option_detail::floatFields<Scalar>()) n.emplace_back(f.first);
+  for (const auto& f : slam_option_detail::boolFields<Scalar>()) n.emplace_back(f.first);
+  return n;
+}
+
+/// Sets one field from its text; throws hawor::Error naming the field and the problem.
+template <typename Scalar>
+void setSlamOption(SlamOptions<Scalar>& o, const std::string& name, const std::string& value) {
+  const std::string what = "SLAM option " + name + "=" + value + ": ";
+  for (const auto& f : slam_option_detail::boolFields<Scalar>()) {
+    if (name != f.first) continue;
+    if (value == "true" || value == "1") f.second(o) = true;
+    else if (value == "false" || value == "0") f.second(o) = false;
+    else throw Error(what + "expects true, false, 1 or 0");
+    return;
+  }
+  char* end = nullptr;
+  const double x = std::strtod(value.c_str(), &end);
+  const bool number = !value.empty() && end && *end == '\0' && std::isfinite(x);
+  for (const auto& f : slam_option_detail::intFields<Scalar>()) {
+    if (name != f.first) continue;
+    if (!number || x != std::floor(x) || std::abs(x) > 1e9) throw Error(what + "expects an integer");
+    f.second(o) = static_cast<int>(x);
+    return;
+  }
+  for (const auto& f : slam_option_detail::scalarFields<Scalar>()) {
+    if (name != f.first) continue;
+    if (!number) throw Error(what + "expects a finite number");
+    f.second(o) = static_cast<Scalar>(x);
+    return;
+  }
+  for (const auto& f : slam_option_detail::floatFields<Scalar>()) {
+    if (name != f.first) continue;
+    if (!number) throw Error(what + "expects a finite number");
+    f.second(o) = static_cast<float>(x);
+    return;
+  }
+  std::string known;
+  for (const std::string& n : slamOptionNames<Scalar>()) known += (known.empty() ? "" : ", ") + n;
+  throw Error("unknown SLAM option '" + name + "' (known: " + known + ")");
+}
+
+/// "NAME=VALUE,NAME=VALUE": each set in turn (an empty list sets nothing).
+template <typename Scalar>
+void setSlamOptions(SlamOptions<Scalar>& o, const std::string& list) {
+  std::size_t at = 0;
+  while (at < list.size()) {
+    std::size_t comma = list.find(',', at);
+    if (comma == std::string::npos) comma = list.size();
+    const std::string item = list.substr(at, comma - at);
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) throw Error("SLAM option '" + item + "': expects NAME=VALUE");
+    setSlamOption(o, item.substr(0, eq), item.substr(eq + 1));
+    at = comma + 1;
+  }
+}
+
+}  // namespace hawor
