@@ -9,7 +9,13 @@
 //
 //   node examples/bench_real_slam.mjs [--work DIR] [--inputs DIR] [--variants a,b] [--hawor BIN]
 //        [--core hawor_core.mjs] [--jobs N] [--json OUT] [--record-only] [--rerecord]
-//        [-- extra hawor slam flags]
+//        [--playback forward|reverse|both] [-- extra hawor slam flags]
+//
+// --playback    reverse: each variant's recorded inputs in reverse order (the clip played
+//               backwards; a `--readout S` among the extra flags is negated, the rows being read
+//               bottom to top in that clip's time), the trajectory scored back in forward order;
+//               both: forward and reverse rows. The SLAM should not care which way the clip runs
+//               (a different sequence of the same frames: twice the evidence for a change).
 //
 // --work DIR    bench_real's work folder (default $TMPDIR/hawor_bench_real): its variants/ and
 //               colmap/reference.json are used (run bench_real.mjs --make-only once, and COLMAP
@@ -27,7 +33,7 @@
 // inputs in this process instead (the product's build; $HAWOR_CORE is used for recording only).
 // `hawor metrics camera` (--hawor) scores both.
 import { spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdirSync, readFileSync, readdirSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, readFileSync, readdirSync, rmSync, symlinkSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -140,15 +146,48 @@ function readTum(text) {
   return text.trim().split('\n').filter((l) => l && !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
 }
 
-function runSlam(o, dir, meta, extra) {
+/** The recorded inputs in reverse order, as links in DIR/reversed/{frames,masks}: frame i is
+ *  frame n-1-i (made once). */
+function reversedInputs(dir, meta) {
+  const rdir = join(dir, 'reversed');
+  if (existsSync(join(rdir, 'done'))) return rdir;
+  rmSync(rdir, { recursive: true, force: true });
+  for (const sub of ['frames', 'masks']) {
+    mkdirSync(join(rdir, sub), { recursive: true });
+    for (let i = 0; i < meta.frames; ++i) {
+      const src = join(dir, sub, `${String(meta.frames - 1 - i).padStart(6, '0')}.png`);
+      if (existsSync(src)) symlinkSync(resolve(src), join(rdir, sub, `${String(i).padStart(6, '0')}.png`));
+    }
+  }
+  writeFileSync(join(rdir, 'done'), '');
+  return rdir;
+}
+
+/** The extra flags for a reversed run: --readout negated. */
+function reversedFlags(extra) {
+  return extra.map((a, i) => (i > 0 && extra[i - 1] === '--readout' ? String(-Number(a)) : a.startsWith('--readout=') ? `--readout=${-Number(a.slice(10))}` : a));
+}
+
+/** A reversed run's out/ files (camera.tum, stats.json) put back in forward frame order. */
+function unreverseOutputs(out, fps) {
+  const rows = readTum(readFileSync(join(out, 'camera.tum'), 'utf8')).reverse();
+  writeFileSync(join(out, 'camera.tum'), rows.map((r, i) => [i / fps, ...r.slice(1)].join(' ')).join('\n') + '\n');
+  const stats = JSON.parse(readFileSync(join(out, 'stats.json'), 'utf8'));
+  if (stats.status) stats.status.reverse();
+  if (stats.per_frame) stats.per_frame.reverse();
+  writeFileSync(join(out, 'stats.json'), JSON.stringify(stats));
+}
+
+function runSlam(o, dir, meta, extra, reversed = false) {
   return new Promise((res) => {
-    const out = join(dir, 'out');
+    const out = join(dir, reversed ? 'out_reversed' : 'out');
+    const src = reversed ? reversedInputs(dir, meta) : dir;
     rmSync(out, { recursive: true, force: true });
     mkdirSync(out, { recursive: true });
-    const args = ['slam', '--images', join(dir, 'frames'), '--masks', join(dir, 'masks'), '--intrinsics', meta.intrinsics.join(','),
+    const args = ['slam', '--images', join(src, 'frames'), '--masks', join(src, 'masks'), '--intrinsics', meta.intrinsics.join(','),
       '--out', join(out, 'camera.tum'), '--stats', join(out, 'stats.json'), '--fps', String(meta.fps ?? 30)];
     if (meta.options?.refineFocal) args.push('--refine-focal', '--focal-prior', String(meta.options.focalPriorSigma ?? 0.3));
-    args.push(...extra);
+    args.push(...(reversed ? reversedFlags(extra) : extra));
     const p = spawn('nice', ['-n', '10', o.hawor, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
     let stdout = '';
     let stderr = '';
@@ -158,6 +197,7 @@ function runSlam(o, dir, meta, extra) {
       writeFileSync(join(out, 'slam.log'), stderr);
       let summary = null;
       try { summary = JSON.parse(stdout.trim().split('\n').pop()); } catch { summary = null; }
+      if (code === 0 && reversed) unreverseOutputs(out, meta.fps ?? 30);
       res({ code, summary, stderrTail: stderr.trim().split('\n').slice(-3).join('\n') });
     });
   });
@@ -165,15 +205,18 @@ function runSlam(o, dir, meta, extra) {
 
 /** The same run through the WebAssembly core's MonoSlam (the product's build) in this process:
  *  { code, summary, tum rows, status }. */
-async function runSlamWasm(o, dir, meta) {
+async function runSlamWasm(o, dir, meta, reversed = false) {
   const { loadCore } = await import('../web/src/core.mjs');
   const core = await loadCore({ path: o.core });
-  const out = join(dir, 'out');
+  const out = join(dir, reversed ? 'out_reversed' : 'out');
   rmSync(out, { recursive: true, force: true });
   mkdirSync(out, { recursive: true });
-  const slam = new core.MonoSlam(meta.intrinsics, meta.width, meta.height, meta.options);
+  const options = { ...meta.options };
+  if (reversed && options.rollingShutter) options.rollingShutter = -options.rollingShutter;
+  const slam = new core.MonoSlam(meta.intrinsics, meta.width, meta.height, options);
   const ms = [];
-  for (let i = 0; i < meta.frames; ++i) {
+  for (let j = 0; j < meta.frames; ++j) {
+    const i = reversed ? meta.frames - 1 - j : j;
     const name = `${String(i).padStart(6, '0')}.png`;
     const f = readOwnPng(readFileSync(join(dir, 'frames', name)));
     const mp = join(dir, 'masks', name);
@@ -191,6 +234,7 @@ async function runSlamWasm(o, dir, meta) {
   writeFileSync(join(out, 'camera.tum'), rows.map((x) => x.join(' ')).join('\n') + '\n');
   const names = ['tracked', 'interpolated', 'lost', 'relocalised'];
   writeFileSync(join(out, 'stats.json'), JSON.stringify({ status: Array.from(r.status, (s) => names[s]) }));
+  if (reversed) unreverseOutputs(out, fps);
   ms.sort((a, b) => a - b);
   return { code: 0, summary: { resets: r.numResets, median_ms_per_frame: ms[Math.floor(ms.length / 2)] } };
 }
@@ -199,7 +243,7 @@ const STATUS = { tracked: 0, interpolated: 1, lost: 2, relocalised: 3 };
 
 function parse(argv) {
   const o = { work: join(tmpdir(), 'hawor_bench_real'), inputs: join(tmpdir(), 'hawor_bench_real_slam'), variants: Object.keys(VARIANTS),
-    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), jobs: 1, extra: [] };
+    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), jobs: 1, extra: [], playback: 'forward' };
   const k = argv.indexOf('--');
   if (k >= 0) { o.extra = argv.slice(k + 1); argv = argv.slice(0, k); }
   for (let i = 0; i < argv.length; ++i) {
@@ -214,6 +258,7 @@ function parse(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--record-only') o.recordOnly = true;
     else if (a === '--rerecord') o.rerecord = true;
+    else if (a === '--playback') { o.playback = v(); if (!['forward', 'reverse', 'both'].includes(o.playback)) throw new Error(`--playback must be forward, reverse or both, not '${o.playback}'`); }
     else throw new Error(`unknown argument '${a}'`);
   }
   for (const n of o.variants) if (!VARIANTS[n]) throw new Error(`unknown variant '${n}' (known: ${Object.keys(VARIANTS).join(', ')})`);
@@ -241,23 +286,29 @@ async function main(argv) {
   }
   if (o.recordOnly) return 0;
   if (!existsSync(o.hawor)) throw new Error(`${o.hawor}: missing (cmake --build DIR --target hawor_cli)`);
-  const rows = await pool(o.variants, o.jobs, async (n) => {
+  const dirs = { forward: [false], reverse: [true], both: [false, true] }[o.playback];
+  const jobs = o.variants.flatMap((n) => dirs.map((reversed) => ({ n, reversed })));
+  const rows = await pool(jobs, o.jobs, async ({ n, reversed }) => {
     const v = VARIANTS[n];
     const dir = join(o.inputs, n);
+    const out = join(dir, reversed ? 'out_reversed' : 'out');
+    const name = reversed ? `${n} (rev)` : n;
     const meta = JSON.parse(readFileSync(join(dir, 'slam.json'), 'utf8'));
-    const run = o.core ? await runSlamWasm(o, dir, meta) : await runSlam(o, dir, meta, o.extra);
-    if (run.code !== 0) return { name: n, error: `exit ${run.code}: ${run.stderrTail}` };
-    const stats = JSON.parse(readFileSync(join(dir, 'out', 'stats.json'), 'utf8'));
-    const tum = readTum(readFileSync(join(dir, 'out', 'camera.tum'), 'utf8'));
+    const run = o.core ? await runSlamWasm(o, dir, meta, reversed) : await runSlam(o, dir, meta, o.extra, reversed);
+    if (run.code !== 0) return { name, reversed, error: `exit ${run.code}: ${run.stderrTail}` };
+    const stats = JSON.parse(readFileSync(join(out, 'stats.json'), 'utf8'));
+    const tum = readTum(readFileSync(join(out, 'camera.tum'), 'utf8'));
     const T = tum.length;
     const positions = new Float64Array(3 * T);
     const quaternions = new Float64Array(4 * T);
     tum.forEach((r, i) => { positions.set(r.slice(1, 4), 3 * i); quaternions.set(r.slice(4, 8), 4 * i); });
     const st = stats.per_frame ? stats.per_frame.map((f) => STATUS[f.status] ?? 1) : (stats.status ?? []).map((s) => STATUS[s] ?? 1);
     const res = { frameCount: T, camera: { positions, quaternions, status: st } };
-    const camera = scoreCamera(res, v, segs, n0, join(dir, 'out'), o.hawor);
-    const firstTracked = st.findIndex((s) => s === 0 || s === 3);
-    return { name: n, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
+    const camera = scoreCamera(res, v, segs, n0, out, o.hawor);
+    // the run's first tracked frame (for a reversed run: the last in forward order)
+    const tracked = st.map((s, i) => (s === 0 || s === 3 ? i : -1)).filter((i) => i >= 0);
+    const firstTracked = tracked.length ? (reversed ? tracked[tracked.length - 1] : tracked[0]) : -1;
+    return { name, reversed, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
       interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
   });
   const names = segs.map((s) => s.name);
@@ -270,8 +321,11 @@ async function main(argv) {
   }
   const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
   process.stdout.write(`${lines.map((l) => l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ')).join('\n')}\n`);
-  const within = rows.filter((r) => !r.error && names.every((s) => r.camera[s]?.atePct <= 2)).length;
-  process.stdout.write(`variants with ATE <= 2 % on every segment: ${within}/${rows.length}\n`);
+  for (const reversed of dirs) {
+    const these = rows.filter((r) => r.reversed === reversed);
+    const within = these.filter((r) => !r.error && names.every((s) => r.camera[s]?.atePct <= 2)).length;
+    process.stdout.write(`variants with ATE <= 2 % on every segment${dirs.length > 1 ? (reversed ? ', played backwards' : ', forwards') : ''}: ${within}/${these.length}\n`);
+  }
   if (o.json) writeFileSync(o.json, `${JSON.stringify({ segments: segs.map((s) => ({ ...s, poses: undefined })), variants: rows }, null, 1)}\n`);
   return 0;
 }

@@ -54,7 +54,8 @@ const char* kSlamHelp =
     "  --fps F               timestamps (default 30)\n"
     "  --readout S           rolling shutter: seconds from the first row's exposure to the\n"
     "                        last's (a phone at 1080p: 0.015-0.03; default 0, a global\n"
-    "                        shutter); at most 1/fps. The tracked points are brought to the\n"
+    "                        shutter; negative: rows read bottom to top, as in a clip played\n"
+    "                        backwards); at most 1/fps. The tracked points are brought to the\n"
     "                        middle row's time under the head's rotation (with --camera: the\n"
     "                        rectified image's rows, an approximation)\n"
     "  --max-frames N        only the first N frames\n"
@@ -134,7 +135,7 @@ int cmdSlam(int argc, char** argv) {
   hawor::SlamOptions<double> opt;
   opt.useMasks = useMasks;
   const double readout = args.number("readout", 0.0);
-  if (!(readout >= 0 && readout <= 1.0 / fps)) throw UsageError("--readout must be between 0 and 1/fps seconds");
+  if (!(std::abs(readout) <= 1.0 / fps)) throw UsageError("--readout must be between -1/fps and 1/fps seconds");
   opt.rollingShutter = readout * fps;
   opt.refineFocal = args.flag("refine-focal");
   if (args.has("focal-prior")) {

@@ -433,7 +433,7 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
     if (!absent(options) && !absent(options["refineFocal"])) opt.refineFocal = options["refineFocal"].as<bool>();
     if (!absent(options) && !absent(options["rollingShutter"])) {
       opt.rollingShutter = options["rollingShutter"].as<double>();
-      if (!(opt.rollingShutter >= 0 && opt.rollingShutter <= 1)) throw hawor::Error("rollingShutter must be in [0, 1] (readout / frame interval)");
+      if (!(std::abs(opt.rollingShutter) <= 1)) throw hawor::Error("rollingShutter must be in [-1, 1] (readout / frame interval; negative: rows read bottom to top)");
     }
     if (!absent(options) && !absent(options["focalPriorSigma"])) {
       opt.focal.priorSigmaLog = options["focalPriorSigma"].as<double>();

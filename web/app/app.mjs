@@ -170,7 +170,7 @@ async function processVideo(url, name, sampleMeta = null) {
     if (camera) options.camera = camera;  // checked by the core in the worker (Lens::parse, CameraModel::validate)
     const readoutMs = number('opt-readout');
     if (readoutMs) {
-      if (!(readoutMs > 0 && readoutMs <= 1000 / fps)) throw new InputError('readout', `${readoutMs} ms is not between 0 and the frame interval (${(1000 / fps).toFixed(1)} ms at ${fps} fps).`);
+      if (!(Math.abs(readoutMs) <= 1000 / fps)) throw new InputError('readout', `${readoutMs} ms is not within the frame interval (±${(1000 / fps).toFixed(1)} ms at ${fps} fps).`);
       options.readout = readoutMs / 1000;
     }
     const eye = number('opt-eyeheight');

@@ -12,7 +12,7 @@
 //      20° ≈ 140 px a frame; looking around and walking stay below 3.5°), every track is also
 //      started at its ray rotated by a constant-angular-velocity prediction (the infinite
 //      homography), the rotation coming from the map or, without a map pose, from the rays.
-//      ROLLING SHUTTER (rollingShutter > 0): the tracked pixels stay raw for KLT; the geometry
+//      ROLLING SHUTTER (rollingShutter ≠ 0): the tracked pixels stay raw for KLT; the geometry
 //      sees them moved to the middle row's time under the last frame's raw-pixel rotation.
 //   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
 //      between a reference frame and the current one once the median flow is large enough; the
@@ -158,7 +158,8 @@ struct SlamOptions {
   CornerOptions corners;
   int maxFeatures = 350;            ///< live tracks after replenishing at a keyframe
   /// Rolling shutter: the readout time from the first row to the last as a fraction of the frame
-  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.45–0.9; 0: a global shutter).
+  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.45–0.9; 0: a global shutter;
+  /// negative: the rows were read bottom to top, as in a clip played backwards).
   /// Row v is exposed (v − (H−1)/2)/H · readout frames after the middle row; each tracked point
   /// is brought to the middle row's time, b ← exp(δω)·b, with ω the last frame's rotation fitted
   /// to the raw pixels (rsRate), before any geometry uses it; KLT keeps the raw pixels. The
@@ -403,7 +404,7 @@ class MonoSlam {
     if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
         opt_.keyframeMaxInterval < 1 || opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
         opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0)) ||
-        !(opt_.rollingShutter >= Scalar(0) && opt_.rollingShutter <= Scalar(1))) {
+        !(std::abs(opt_.rollingShutter) <= Scalar(1))) {
       throw Error("MonoSlam: invalid options");
     }
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
@@ -695,7 +696,7 @@ class MonoSlam {
   /// SlamOptions::rollingShutter: image pixel → the middle row's time (sign +1), or back (−1,
   /// the inverse to first order). The identity for a global shutter or without a rotation rate.
   Vec2f rollingShutterShift(const Vec2f& p, Scalar sign) const {
-    if (!(opt_.rollingShutter > Scalar(0)) || rsOmega_.isZero(Scalar(0))) return p;
+    if (opt_.rollingShutter == Scalar(0) || rsOmega_.isZero(Scalar(0))) return p;
     const Scalar d = sign * opt_.rollingShutter * ((Scalar(p(1)) - Scalar(0.5) * Scalar(height_ - 1)) / Scalar(height_));
     const V3 b((Scalar(p(0)) - cam_.cx) / cam_.fx, (Scalar(p(1)) - cam_.cy) / cam_.fy, Scalar(1));
     const V3 r = SO3<Scalar>::exp(V3(rsOmega_ * d)) * b;
@@ -708,7 +709,7 @@ class MonoSlam {
   /// or with fewer than 8 rays. The rolling shutter's shear is the same in both frames under a
   /// steady turn, so the raw rays' best rotation is the middle rows' one.
   V3 rsRate() {
-    if (!(opt_.rollingShutter > Scalar(0))) return V3::Zero();
+    if (opt_.rollingShutter == Scalar(0)) return V3::Zero();
     std::vector<V2> a, b;
     for (std::size_t i = 0; i < from_.size(); ++i) {
       if (!ok_[i]) continue;

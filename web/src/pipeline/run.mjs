@@ -40,7 +40,9 @@
 //                                        determine it); when refined, the hands are re-fitted
 //           focalPriorSigma? (0.3)       the prior's std of log f (user focal: 0.1 by default)
 //           readout? (0)                 rolling shutter: seconds from the first row's exposure
-//                                        to the last's (0: global shutter; at most 1 / fps); the
+//                                        to the last's (0: global shutter; at most 1 / fps;
+//                                        negative: rows read bottom to top, as in a clip played
+//                                        backwards); the
 //                                        SLAM brings its points to the middle row's time under
 //                                        the head's rotation (SlamOptions::rollingShutter)
 //           focalMaxPasses? (4)          SLAM passes at most (see focalRerunBytes)
@@ -359,8 +361,8 @@ export async function runPipeline(source, options, hooks = {}) {
   }
   if (!(Number.isFinite(fps) && fps > 0)) throw new Error(`runPipeline: bad fps ${source.fps}`);
   const readout = options.readout ?? 0;
-  if (!(Number.isFinite(readout) && readout >= 0 && readout <= 1 / fps)) {
-    throw new Error(`runPipeline: the rolling-shutter readout ${options.readout} s must lie between 0 and the frame interval (${(1 / fps).toFixed(4)} s)`);
+  if (!(Number.isFinite(readout) && Math.abs(readout) <= 1 / fps)) {
+    throw new Error(`runPipeline: the rolling-shutter readout ${options.readout} s must lie within one frame interval (±${(1 / fps).toFixed(4)} s)`);
   }
   if (options.eyeHeight !== undefined && eyeHeightError(options.eyeHeight)) throw new Error(`runPipeline: ${eyeHeightError(options.eyeHeight)}`);
   if (!source.frames || typeof source.frames[Symbol.asyncIterator] !== 'function' && typeof source.frames[Symbol.iterator] !== 'function') {
