@@ -7,37 +7,16 @@
 // so the masked/unmasked comparison sees identical images and machine load.
 //
 //   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
-//              [--json FILE] [--dump PREFIX] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence]
-//              [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge]
-//              [--max-ray-jump DEG] [--no-front-check] [--no-head-gap-whole] [--head-join-motion-r2 X]
-//              [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N] [--no-segment-links]
+//              [--json FILE] [--dump PREFIX] [--masked-only] [--log] [--set NAME=VALUE,...]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
 //                  relative to the first frame (the estimate's world)
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          each run's diagnostics (initialisation, keyframes, losses) on stderr
-//   --no-turn-scale  SlamOptions::turnScaleJoin off (segments joined by scene depth only)
-//   --no-reloc       SlamOptions::relocalise off (a loss always re-initialises a new segment)
-//   --no-sequence    SlamOptions::sequenceRefine off (no full-sequence bundle adjustment)
-//   --no-head-model  SlamOptions::headModelFill off (unposed frames held / interpolated)
-//   --no-head-join-all  SlamOptions::headModelJoinAll off (segments joined pairwise only)
-//   --no-head-place-short  SlamOptions::headModelPlaceShort off (a short segment keeps its own positions)
-//   --no-revisit     SlamOptions::revisitSearch off (no search of old keyframes at keyframes)
-//   --no-third-view  SlamOptions::twoViewThirdView off (an ambiguous two-view waits for the next try)
-//   --no-turn-bridge SlamOptions::turnBridge off (a fast turn that runs out of map points resets it)
-//   --no-segment-links SlamOptions::segmentLinks off (no place recognition across a broken rotation chain)
-//   --seq-iterations N  SlamOptions::sequence.iterations (LM iterations per round of the sequence refinement)
-//   --seq-std-ratio X  SlamOptions::sequence.maxTranslationStdRatio (a frame's translation std over the median, at most)
-//   --head-prior-sigma X  SlamOptions::sequence.headPriorSigma (the head prior's σ over its fit's rms residual); 0 turns the prior off
-//   --no-head-gap-whole  SlamOptions::headModel.wholeSequenceFallback off (a gap whose window fails keeps the interpolation)
-//   --head-join-motion-r2 X  SlamOptions::headModel.joinMinMotionR2 (the segment join's motion R² gate, default 0.7)
-//   --no-head-prejoin  SlamOptions::headModelJoinBeforeRefine off (segments joined by one model only after the sequence refinement)
-//   --coast-frames N  SlamOptions::coastFrames (frames a turn's rotation is carried on without rays, default 6; 0 holds it)
-//   --refind-keyframes N  SlamOptions::refindKeyframes (recent keyframes whose points are re-found by KLT; default 0: off)
-//   --reloc-anchors N  SlamOptions::relocAnchors (default 8; 0: only the most recent kept keyframes)
-//   --max-ray-jump DEG  SlamOptions::maxRayJumpDeg (default 6; 0 keeps tracks that jump off the rays' rotation)
-//   --no-front-check TwoViewOptions::minInFrontRatio 0 (a two-view needs only minTriangulated points)
+//   --set NAME=VALUE,...  SlamOptions fields by name for both runs, the ablations
+//                  (slam/slam_option_table.hpp; as `hawor slam --set`), e.g.
+//                  --set relocalise=false,sequence.headPrior=false
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -53,6 +32,7 @@
 #include "hawor/hand/mirror.hpp"
 #include "hawor/hand/synthetic_hand.hpp"
 #include "hawor/slam/mono_slam.hpp"
+#include "hawor/slam/slam_option_table.hpp"
 #include "hawor/synth/synth.hpp"
 
 namespace {
@@ -89,17 +69,8 @@ int main(int argc, char** argv) {
   int frames = 0, width = 640, height = 480;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
-  bool log = false, maskedOnly = false, turnScale = true, relocalise = true, sequence = true, headModel = true, headJoinAll = true, headPlaceShort = true, revisit = true, thirdView = true,
-       turnBridge = true, frontCheck = true, segmentLinks = true;
-  double maxRayJump = -1;  // < 0: the library's default
-  int relocAnchors = -1;   // < 0: the library's default
-  int seqIterations = -1;  // < 0: the library's default
-  double seqStdRatio = -1;  // < 0: the library's default
-  double headPriorSigma = -1;  // < 0: the library's default; 0: off
-  bool headGapWhole = true, headPrejoin = true;
-  double headJoinMotionR2 = -2;  // < -1: the library's default
-  int coastFrames = -1;          // < 0: the library's default
-  int refindKeyframes = -1;      // < 0: the library's default
+  bool log = false, maskedOnly = false;
+  std::string settings;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -131,52 +102,19 @@ int main(int argc, char** argv) {
       maskedOnly = true;
     } else if (a == "--log") {
       log = true;
-    } else if (a == "--no-turn-scale") {
-      turnScale = false;
-    } else if (a == "--no-reloc") {
-      relocalise = false;
-    } else if (a == "--no-sequence") {
-      sequence = false;
-    } else if (a == "--head-prior-sigma") {
-      headPriorSigma = std::stod(next());
-    } else if (a == "--no-head-prejoin") {
-      headPrejoin = false;
-    } else if (a == "--no-head-gap-whole") {
-      headGapWhole = false;
-    } else if (a == "--head-join-motion-r2") {
-      headJoinMotionR2 = std::stod(next());
-    } else if (a == "--coast-frames") {
-      coastFrames = std::stoi(next());
-    } else if (a == "--refind-keyframes") {
-      refindKeyframes = std::stoi(next());
-    } else if (a == "--no-head-model") {
-      headModel = false;
-    } else if (a == "--no-head-join-all") {
-      headJoinAll = false;
-    } else if (a == "--no-head-place-short") {
-      headPlaceShort = false;
-    } else if (a == "--no-revisit") {
-      revisit = false;
-    } else if (a == "--no-third-view") {
-      thirdView = false;
-    } else if (a == "--no-turn-bridge") {
-      turnBridge = false;
-    } else if (a == "--no-segment-links") {
-      segmentLinks = false;
-    } else if (a == "--max-ray-jump") {
-      maxRayJump = std::stod(next());
-    } else if (a == "--no-front-check") {
-      frontCheck = false;
-    } else if (a == "--seq-iterations") {
-      seqIterations = std::stoi(next());
-    } else if (a == "--seq-std-ratio") {
-      seqStdRatio = std::stod(next());
-    } else if (a == "--reloc-anchors") {
-      relocAnchors = std::stoi(next());
+    } else if (a == "--set") {
+      settings += (settings.empty() ? std::string() : std::string(",")) + next();
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--no-turn-scale] [--no-reloc] [--no-sequence] [--no-head-model] [--no-head-join-all] [--no-head-place-short] [--no-revisit] [--no-third-view] [--no-turn-bridge] [--no-segment-links] [--max-ray-jump DEG] [--no-front-check] [--reloc-anchors N] [--seq-iterations N] [--seq-std-ratio X] [--head-prior-sigma X] [--no-head-gap-whole] [--head-join-motion-r2 X] [--no-head-prejoin] [--coast-frames N] [--refind-keyframes N]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--set NAME=VALUE,...]\n");
       return 2;
     }
+  }
+  try {
+    hawor::SlamOptions<double> check;
+    hawor::setSlamOptions(check, settings);
+  } catch (const hawor::Error& e) {
+    std::fprintf(stderr, "bench_slam: --set: %s\n", e.what());
+    return 2;
   }
   try {
     hawor::HandModel<double> right, left;
@@ -212,29 +150,9 @@ int main(int argc, char** argv) {
       const int n = seq.numFrames();
       hawor::PinholeCamera<double> cam = seq.camera();
       hawor::SlamOptions<double> om, ou;
+      hawor::setSlamOptions(om, settings);
+      hawor::setSlamOptions(ou, settings);
       ou.useMasks = false;
-      om.turnScaleJoin = ou.turnScaleJoin = turnScale;
-      om.relocalise = ou.relocalise = relocalise;
-      om.sequenceRefine = ou.sequenceRefine = sequence;
-      om.headModelFill = ou.headModelFill = headModel;
-      if (headPriorSigma == 0) om.sequence.headPrior = ou.sequence.headPrior = false;
-      if (headPriorSigma > 0) om.sequence.headPriorSigma = ou.sequence.headPriorSigma = headPriorSigma;
-      om.headModelJoinAll = ou.headModelJoinAll = headJoinAll;
-      om.headModel.wholeSequenceFallback = ou.headModel.wholeSequenceFallback = headGapWhole;
-      om.headModelJoinBeforeRefine = ou.headModelJoinBeforeRefine = headPrejoin;
-      if (headJoinMotionR2 >= -1) om.headModel.joinMinMotionR2 = ou.headModel.joinMinMotionR2 = headJoinMotionR2;
-      if (coastFrames >= 0) om.coastFrames = ou.coastFrames = coastFrames;
-      if (refindKeyframes >= 0) om.refindKeyframes = ou.refindKeyframes = refindKeyframes;
-      om.headModelPlaceShort = ou.headModelPlaceShort = headPlaceShort;
-      om.revisitSearch = ou.revisitSearch = revisit;
-      om.twoViewThirdView = ou.twoViewThirdView = thirdView;
-      om.turnBridge = ou.turnBridge = turnBridge;
-      om.segmentLinks = ou.segmentLinks = segmentLinks;
-      if (maxRayJump >= 0) om.maxRayJumpDeg = ou.maxRayJumpDeg = maxRayJump;
-      if (!frontCheck) om.twoView.minInFrontRatio = ou.twoView.minInFrontRatio = 0;
-      if (relocAnchors >= 0) om.relocAnchors = ou.relocAnchors = relocAnchors;
-      if (seqIterations > 0) om.sequence.iterations = ou.sequence.iterations = seqIterations;
-      if (seqStdRatio > 0) om.sequence.maxTranslationStdRatio = ou.sequence.maxTranslationStdRatio = seqStdRatio;
       if (log) {
         om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s masked] %s\n", name.c_str(), l.c_str()); };
         ou.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s unmasked] %s\n", name.c_str(), l.c_str()); };

@@ -50,7 +50,7 @@ def umeyama(src, dst):
 
 
 def declared_options():
-    """The int/Scalar/float/bool fields of SlamOptions and of its nested front-end option structs,
+    """The int/Scalar/float/bool fields of SlamOptions and of its nested option structs,
     parsed from the headers: what `--set` must accept."""
     inc = os.path.join(os.path.dirname(__file__), "..", "..", "include", "hawor", "slam")
 
@@ -63,7 +63,11 @@ def declared_options():
     names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
     for prefix, header, struct in (("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
                                    ("twoView", "two_view.hpp", "TwoViewOptions"),
-                                   ("pnp", "pnp_ransac.hpp", "PnPRansacOptions")):
+                                   ("pnp", "pnp_ransac.hpp", "PnPRansacOptions"),
+                                   ("bridge", "turn_bridge.hpp", "TurnBridgeOptions"),
+                                   ("sequence", "sequence_refine.hpp", "SequenceRefineOptions"),
+                                   ("headModel", "head_motion.hpp", "HeadModelOptions"),
+                                   ("focal", "focal_refine.hpp", "FocalRefineOptions")):
         names |= {prefix + "." + n for n in fields(header, struct, "};")}
     return names
 

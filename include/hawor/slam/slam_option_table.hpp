@@ -1,8 +1,8 @@
 // hawor/slam/slam_option_table.hpp — SlamOptions by name: `setSlamOption(options, "initMinTracks",
 // "40")`, for tools that try a setting without a rebuild (`hawor slam --set NAME=VALUE,...`, the
 // SLAM benchmarks' ablations). The numeric and boolean fields of SlamOptions and of its
-// front end's and initialisation's option structs (corners.NAME, klt.NAME, twoView.NAME,
-// pnp.NAME); values are checked (an integer for an int, a finite number,
+// parts' option structs (corners., klt., twoView., pnp., bridge., sequence., headModel.,
+// focal. NAME); values are checked (an integer for an int, a finite number,
 // true/false/1/0 for a bool) and an unknown name is an error that lists the known ones.
 #pragma once
 
@@ -82,6 +82,21 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"pnp.maxIterations", [](O& o) -> T& { return o.pnp.maxIterations; }},
       {"pnp.minIterations", [](O& o) -> T& { return o.pnp.minIterations; }},
       {"pnp.minInliers", [](O& o) -> T& { return o.pnp.minInliers; }},
+      {"bridge.minTracks", [](O& o) -> T& { return o.bridge.minTracks; }},
+      {"bridge.minPoints", [](O& o) -> T& { return o.bridge.minPoints; }},
+      {"sequence.minObservations", [](O& o) -> T& { return o.sequence.minObservations; }},
+      {"sequence.minFrameObservations", [](O& o) -> T& { return o.sequence.minFrameObservations; }},
+      {"sequence.maxAdjustedFrames", [](O& o) -> T& { return o.sequence.maxAdjustedFrames; }},
+      {"sequence.denseMaxFrames", [](O& o) -> T& { return o.sequence.denseMaxFrames; }},
+      {"sequence.rounds", [](O& o) -> T& { return o.sequence.rounds; }},
+      {"sequence.iterations", [](O& o) -> T& { return o.sequence.iterations; }},
+      {"headModel.window", [](O& o) -> T& { return o.headModel.window; }},
+      {"headModel.minFrames", [](O& o) -> T& { return o.headModel.minFrames; }},
+      {"headModel.lag", [](O& o) -> T& { return o.headModel.lag; }},
+      {"focal.gridPerOctave", [](O& o) -> T& { return o.focal.gridPerOctave; }},
+      {"focal.minPoses", [](O& o) -> T& { return o.focal.minPoses; }},
+      {"focal.minObservations", [](O& o) -> T& { return o.focal.minObservations; }},
+      {"focal.rounds", [](O& o) -> T& { return o.focal.rounds; }},
   };
   return f;
 }
@@ -130,6 +145,35 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
       {"twoView.essentialOverPlaneInliers", [](O& o) -> T& { return o.twoView.essentialOverPlaneInliers; }},
       {"pnp.thresholdPx", [](O& o) -> T& { return o.pnp.thresholdPx; }},
       {"pnp.confidence", [](O& o) -> T& { return o.pnp.confidence; }},
+      {"bridge.inlierPx", [](O& o) -> T& { return o.bridge.inlierPx; }},
+      {"bridge.minInlierRatio", [](O& o) -> T& { return o.bridge.minInlierRatio; }},
+      {"bridge.minStepDeg", [](O& o) -> T& { return o.bridge.minStepDeg; }},
+      {"bridge.minPointRatio", [](O& o) -> T& { return o.bridge.minPointRatio; }},
+      {"bridge.pointInlierPx", [](O& o) -> T& { return o.bridge.pointInlierPx; }},
+      {"bridge.maxLengthRatio", [](O& o) -> T& { return o.bridge.maxLengthRatio; }},
+      {"sequence.minParallaxDeg", [](O& o) -> T& { return o.sequence.minParallaxDeg; }},
+      {"sequence.maxReprojPx", [](O& o) -> T& { return o.sequence.maxReprojPx; }},
+      {"sequence.minGatePx", [](O& o) -> T& { return o.sequence.minGatePx; }},
+      {"sequence.maxResectionRotationDeg", [](O& o) -> T& { return o.sequence.maxResectionRotationDeg; }},
+      {"sequence.maxTranslationStdRatio", [](O& o) -> T& { return o.sequence.maxTranslationStdRatio; }},
+      {"sequence.sigmaPx", [](O& o) -> T& { return o.sequence.sigmaPx; }},
+      {"sequence.robustScale", [](O& o) -> T& { return o.sequence.robustScale; }},
+      {"sequence.headPriorSigma", [](O& o) -> T& { return o.sequence.headPriorSigma; }},
+      {"headModel.minSpreadDeg", [](O& o) -> T& { return o.headModel.minSpreadDeg; }},
+      {"headModel.minR2", [](O& o) -> T& { return o.headModel.minR2; }},
+      {"headModel.minMotionR2", [](O& o) -> T& { return o.headModel.minMotionR2; }},
+      {"headModel.minFrontCos", [](O& o) -> T& { return o.headModel.minFrontCos; }},
+      {"headModel.maxRadiusSpread", [](O& o) -> T& { return o.headModel.maxRadiusSpread; }},
+      {"headModel.ridge", [](O& o) -> T& { return o.headModel.ridge; }},
+      {"headModel.minGapTurnDeg", [](O& o) -> T& { return o.headModel.minGapTurnDeg; }},
+      {"headModel.joinMinMotionR2", [](O& o) -> T& { return o.headModel.joinMinMotionR2; }},
+      {"focal.priorSigmaLog", [](O& o) -> T& { return o.focal.priorSigmaLog; }},
+      {"focal.priorFx", [](O& o) -> T& { return o.focal.priorFx; }},
+      {"focal.searchMin", [](O& o) -> T& { return o.focal.searchMin; }},
+      {"focal.maxStdLog", [](O& o) -> T& { return o.focal.maxStdLog; }},
+      {"focal.minChange", [](O& o) -> T& { return o.focal.minChange; }},
+      {"focal.minChangeStds", [](O& o) -> T& { return o.focal.minChangeStds; }},
+      {"focal.minStdLog", [](O& o) -> T& { return o.focal.minStdLog; }},
   };
   return f;
 }
@@ -175,6 +219,8 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
       {"twoView.essentialOverPlane", [](O& o) -> T& { return o.twoView.essentialOverPlane; }},
       {"twoView.refine", [](O& o) -> T& { return o.twoView.refine; }},
       {"pnp.refine", [](O& o) -> T& { return o.pnp.refine; }},
+      {"sequence.headPrior", [](O& o) -> T& { return o.sequence.headPrior; }},
+      {"headModel.wholeSequenceFallback", [](O& o) -> T& { return o.headModel.wholeSequenceFallback; }},
   };
   return f;
 }
