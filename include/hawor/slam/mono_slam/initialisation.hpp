@@ -1,0 +1,307 @@
+// hawor/slam/mono_slam/initialisation.hpp — MonoSlam's initialisation: the two-view reference, the
+// pair's attempt, the first map of a segment.
+// Member functions of MonoSlam (slam/mono_slam.hpp: the class, its state and the overview);
+// included at the end of that header.
+#pragma once
+
+#include "../mono_slam.hpp"
+
+namespace hawor {
+
+template <typename Scalar>
+void MonoSlam<Scalar>::initialise(int f) {
+  Frame& fr = frames_.back();
+  // Rotation-only pose from the ray chain (position held).
+  Mat3<Scalar> dR;
+  if (rayRotation(dR)) {
+    fr.T = SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(frames_[static_cast<std::size_t>(f - 1)].T.rotationMatrix() * dR)),
+                frames_[static_cast<std::size_t>(f - 1)].T.translation());
+    dropJumpedTracks(dR);
+  } else if (!coastRotation(f)) {
+    fr.rotationKnown = false;
+  }
+  fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
+  if (afterLoss_ && relocalise(f)) return;
+  // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
+  // tracks), or any of the last initMaxGap frames (their tracks are in the per-frame
+  // observations, their rotations from the rays): the oldest of them sharing initMinTracks
+  // tracks. During a head turn the tracks live only a few frames, and while hands sweep over a
+  // slowly moving view they die one by one: a fixed reference would lose them all before the
+  // motion gives parallax (hands_cover seed 7 never initialised in 300 frames).
+  fr.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
+  const int window = f - opt_.initMaxGap;
+  if (window - 1 >= 0 && window - 1 != refFrame_) frames_[static_cast<std::size_t>(window - 1)].mask = CoarseMask();
+  const int oldest = std::max(segmentStart_, std::min(refFrame_, window));
+  const int minTracks = afterLoss_ ? opt_.reinitMinTracks : opt_.initMinTracks;
+  int bestG = -1, refAlive = 0;
+  float bestFlow = -1;
+  std::vector<int> bestIdx, bestOther;
+  std::vector<int> idx, other;
+  std::vector<float> flow;
+  for (int g = f - 1; g >= oldest; --g) {
+    const Frame& rf = frames_[static_cast<std::size_t>(g)];
+    if (g != refFrame_ && (g < window || !rf.rotationKnown)) continue;
+    // Common tracks: both observation lists are sorted by track id (ids only grow).
+    idx.clear(), other.clear(), flow.clear();
+    std::size_t a = 0;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      while (a < rf.obsTrack.size() && rf.obsTrack[a] < tracks_[i].id) ++a;
+      if (a < rf.obsTrack.size() && rf.obsTrack[a] == tracks_[i].id) idx.push_back(static_cast<int>(i)), other.push_back(static_cast<int>(a));
+    }
+    if (g == refFrame_) refAlive = static_cast<int>(idx.size());
+    if (static_cast<int>(idx.size()) < minTracks) continue;
+    // Rotation-compensated flow: where the reference ray lands under the rotation alone.
+    const Mat3<Scalar> Rcr = fr.T.rotationMatrix().transpose() * rf.T.rotationMatrix();
+    for (std::size_t j = 0; j < idx.size(); ++j) {
+      const V2 x1 = normalised(rf.obsUv[static_cast<std::size_t>(other[j])]);
+      const V2 x2 = normalised(tracks_[static_cast<std::size_t>(idx[j])].uv);
+      const V3 r = Rcr * V3(x1(0), x1(1), Scalar(1));
+      if (!(r(2) > Scalar(0))) continue;
+      const float du = float(cam_.fx * (r(0) / r(2) - x2(0))), dv = float(cam_.fy * (r(1) / r(2) - x2(1)));
+      flow.push_back(std::sqrt(du * du + dv * dv));
+    }
+    if (flow.size() < 8) continue;
+    std::nth_element(flow.begin(), flow.begin() + static_cast<std::ptrdiff_t>(flow.size() / 2), flow.end());
+    // The oldest frame with enough common tracks: the longest baseline available.
+    bestFlow = flow[flow.size() / 2], bestG = g, bestIdx = idx, bestOther = other;
+  }
+  // Try when the rotation-compensated flow is large enough, or after a large rotation: the
+  // flow is compensated with the rays' rotation, which under a sideways head translation
+  // absorbs most of the parallax (the rotation–translation ambiguity); the two-view decides.
+  const Scalar turnedDeg = bestG >= 0 ? rotationAngleDeg(frames_[static_cast<std::size_t>(bestG)].T, fr.T) : Scalar(0);
+  const bool fastTurn = bestG >= 0 && turning_ && turnedDeg >= opt_.initMinRotationDeg;
+  const bool tryNow = bestG >= 0 && ((bestFlow >= float(opt_.initMinFlowPx) && f - lastInitAttempt_ >= opt_.initEveryFrames) ||
+                                     (fastTurn && f - lastInitAttempt_ >= 2));
+  if (tryNow) {
+    lastInitAttempt_ = f;
+    const Frame& rf = frames_[static_cast<std::size_t>(bestG)];
+    std::vector<V2> x1, x2;
+    for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+      x1.push_back(normalised(rf.obsUv[static_cast<std::size_t>(bestOther[j])]));
+      x2.push_back(normalised(tracks_[static_cast<std::size_t>(bestIdx[j])].uv));
+    }
+    // Further views (the frames between, every second) settle a two-fold ambiguity
+    // (two_view.hpp): the head's sway curves, and a view off the pair's line of motion fits
+    // only the true plane.
+    std::vector<std::vector<V2>> x3;
+    if (opt_.twoViewThirdView) {
+      const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+      for (int mid = bestG + 2; mid < f; mid += 2) {
+        const Frame& mf = frames_[static_cast<std::size_t>(mid)];
+        std::vector<V2> v;
+        std::size_t a = 0;
+        for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+          const int id = tracks_[static_cast<std::size_t>(bestIdx[j])].id;
+          while (a < mf.obsTrack.size() && mf.obsTrack[a] < id) ++a;
+          v.push_back(a < mf.obsTrack.size() && mf.obsTrack[a] == id ? normalised(mf.obsUv[a]) : V2(nan, nan));
+        }
+        x3.push_back(std::move(v));
+      }
+    }
+    TwoViewOptions<Scalar> tvo = opt_.twoView;
+    tvo.seed = opt_.twoView.seed + static_cast<std::uint32_t>(f);
+    // In a fast turn the rotation dwarfs the translation: H (the rotation) is the model, and
+    // E's extra inliers are noise read as parallax (fast_turns seed 8, frame 204).
+    tvo.essentialOverPlane = opt_.twoView.essentialOverPlane && !turning_;
+    const TwoViewResult<Scalar> tv = initializeTwoView(x1, x2, tvo, x3.empty() ? nullptr : &x3);
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": two-view with reference " + std::to_string(bestG) + ", " +
+               std::to_string(x1.size()) + " tracks, flow " + std::to_string(bestFlow) + " px: status " +
+               std::to_string(int(tv.status)) + " model " + std::to_string(int(tv.model)) + " inliers " +
+               std::to_string(tv.numInliers) + " triangulated " + std::to_string(tv.numTriangulated) +
+               " parallax " + std::to_string(double(tv.medianParallaxDeg)) +
+               (tv.essentialOverPlane ? " (E over GRIC's H)" : "") +
+               (tv.thirdViewCandidates > 0 ? ", further views: " +
+                                                 std::to_string(tv.thirdViewCandidates) + " candidates, costs " +
+                                                 std::to_string(double(tv.thirdViewCost)) + " / " +
+                                                 std::to_string(double(tv.thirdViewRunnerUp)) + " px2"
+                                           : std::string()));
+    }
+    if (tv.ok()) {
+      if (bestG != refFrame_ && refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
+      refFrame_ = bestG;
+      refMask_ = rf.mask;
+      for (Track& t : tracks_) t.fromRef = false;
+      for (std::size_t j = 0; j < bestIdx.size(); ++j) {
+        Track& t = tracks_[static_cast<std::size_t>(bestIdx[j])];
+        t.refUv = rf.obsUv[static_cast<std::size_t>(bestOther[j])];
+        t.fromRef = true;
+      }
+      buildMap(f, tv, bestIdx);
+      for (int g = oldest; g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
+      return;
+    }
+  }
+  // Too few reference tracks left: this frame becomes the reference (new corners first). New
+  // corners also whenever the tracks thin out (they give the later frames a reference among
+  // the recent ones).
+  const int refTracks = static_cast<int>(frames_[static_cast<std::size_t>(refFrame_)].obsTrack.size());
+  if (refAlive < std::max(minTracks, refTracks / 4)) {
+    if (opt_.log) {
+      opt_.log("frame " + std::to_string(f) + ": new initialisation reference (" + std::to_string(refAlive) + " tracks left)");
+    }
+    if (refFrame_ < window) frames_[static_cast<std::size_t>(refFrame_)].mask = CoarseMask();
+    setReference(f);
+  } else if (static_cast<int>(tracks_.size()) < opt_.maxFeatures * 7 / 10) {
+    replenish();
+  }
+}
+
+template <typename Scalar>
+void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx) {
+  SE3T Tref = frames_[static_cast<std::size_t>(refFrame_)].T;  // provisional world of the ref frame
+  // The two-view map lives in the reference camera's frame with a unit baseline. Join it to
+  // the existing world (first map: the reference frame's provisional pose, scale 1; after a
+  // loss: by the tracks' observations in the old map's keyframes when they determine a
+  // similarity (joinToOldMap; the new keyframes then continue the old segment), else the
+  // rotation from the rays, the position held and the scale from the median scene depth of
+  // the last map, docs/design.md §5).
+  Scalar s = Scalar(1);
+  std::vector<char> linked;
+  const bool joined = everInitialised_ && opt_.joinOldMap && joinToOldMap(f, tv, idx, Tref, s, linked);
+  if (joined) --segment_;
+  if (!joined) {
+    // A new segment: the old map is no longer the one tracked. Its kept images stay for the
+    // place recognition when the rotation chain to it is broken (segmentLinks; else the images
+    // kept from an earlier break stay, for the same chain).
+    if (opt_.segmentLinks && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
+      linkPyr_.swap(relocPyr_);
+      // The segment's last keyframe too: a break comes in a turn, and the head often turns back.
+      if (lastKfPyr_.kf >= 0 && std::none_of(linkPyr_.begin(), linkPyr_.end(), [&](const KeyframePyramid& e) { return e.kf == lastKfPyr_.kf; })) {
+        linkPyr_.push_back(std::move(lastKfPyr_));
+      }
+    }
+    relocPyr_.clear();
+    lastKfPyr_ = KeyframePyramid();
+  }
+  const int seg = segment_;
+  if (!joined && everInitialised_ && lastMedianDepth_ > Scalar(0)) {
+    std::vector<Scalar> d;
+    for (std::size_t j = 0; j < idx.size(); ++j) {
+      if (tv.triangulated[j] && tv.points[j](2) > Scalar(0)) d.push_back(tv.points[j](2));
+    }
+    if (!d.empty()) {
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+      s = lastMedianDepth_ / d[d.size() / 2];
+      if (opt_.log) {
+        opt_.log("frame " + std::to_string(f) + ": new segment scaled by the median depth: " + std::to_string(double(lastMedianDepth_)) +
+                 " (last map) / " + std::to_string(double(d[d.size() / 2])) + " (two-view, " + std::to_string(d.size()) +
+                 " points) = " + std::to_string(double(s)));
+      }
+    }
+  }
+  auto toWorld = [&](const V3& x) { return V3(Tref * V3(s * x)); };
+  SE3T T1 = Tref * SE3T(tv.T_c1_c2.rotation(), V3(s * tv.T_c1_c2.translation()));
+  const int k0 = static_cast<int>(keyframes_.size());
+  keyframes_.push_back(Keyframe{refFrame_, Tref, refMask_, {}, seg});
+  keyframes_.push_back(Keyframe{f, T1, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, seg});
+  for (std::size_t j = 0; j < idx.size(); ++j) {
+    Track& t = tracks_[static_cast<std::size_t>(idx[j])];
+    const V2 u0(Scalar(t.refUv(0)), Scalar(t.refUv(1))), u1(Scalar(t.uv(0)), Scalar(t.uv(1)));
+    if (tv.triangulated[j] && joined && linked[j] && t.oldPoint >= 0) {
+      // The same physical point as an old map point: one point, observed by both segments.
+      MapPoint& p = points_[static_cast<std::size_t>(t.oldPoint)];
+      p.obs.push_back(Obs{k0, u0});
+      p.obs.push_back(Obs{k0 + 1, u1});
+      keyframes_[static_cast<std::size_t>(k0)].points.push_back(t.oldPoint);
+      keyframes_[static_cast<std::size_t>(k0 + 1)].points.push_back(t.oldPoint);
+      t.point = t.oldPoint;
+      trackPoint_[static_cast<std::size_t>(t.id)] = t.oldPoint;
+    } else if (tv.triangulated[j]) {
+      MapPoint p;
+      p.X = toWorld(tv.points[j]);
+      p.obs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
+      if (joined && linked[j]) p.obs.insert(p.obs.begin(), t.oldObs.begin(), t.oldObs.end());
+      t.point = addPoint(std::move(p), t.id);
+    } else {
+      t.kfObs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
+    }
+  }
+  for (Track& t : tracks_) {
+    t.fromRef = false;
+    t.oldObs.clear();
+    t.oldPoint = -1;
+  }
+  Frame& fr = frames_.back();
+  fr.T = T1;
+  fr.posed = true;
+  fr.status = everInitialised_ ? SlamStatus::Relocalised : SlamStatus::Tracked;
+  frames_[static_cast<std::size_t>(refFrame_)].T = Tref;
+  frames_[static_cast<std::size_t>(refFrame_)].posed = true;
+  // Frames between: interpolated for now (refined against the map in finish()).
+  for (int g = refFrame_ + 1; g < f; ++g) {
+    const Scalar a = Scalar(g - refFrame_) / Scalar(f - refFrame_);
+    Frame& m = frames_[static_cast<std::size_t>(g)];
+    m.T = SE3T(m.rotationKnown ? m.T.rotation() : interpolate(Tref.rotation(), T1.rotation(), a),
+               V3((Scalar(1) - a) * Tref.translation() + a * T1.translation()));
+  }
+  state_ = State::Tracking;
+  everInitialised_ = true;
+  afterLoss_ = false;
+  lost_ = 0;
+  closeKeyframe(fr);
+}
+
+/// After a reset, the similarity taking the new two-view map (reference camera frame, unit
+/// baseline) into the old world (similarity_join.hpp), from the tracks the old segment saw:
+/// their rays in the old keyframes, or their old map points; started at the reference frame's
+/// rotation from the ray chain and its held position. Accepted with joinMinTracks inliers (half
+/// of the candidates at least) and the scale known to joinMaxScaleStd: old keyframes too close
+/// to the new cameras leave it unobservable, and the median-depth join is kept. `linked`: per
+/// idx entry, the tracks that agree.
+template <typename Scalar>
+bool MonoSlam<Scalar>::joinToOldMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx,
+    SE3T& Tref, Scalar& sOut, std::vector<char>& linked) {
+  linked.assign(idx.size(), 0);
+  std::vector<SimJoinCandidate<Scalar>> cands;
+  std::vector<int> candJ;
+  std::vector<Scalar> depths;
+  for (std::size_t j = 0; j < idx.size(); ++j) {
+    if (!tv.triangulated[j]) continue;
+    const Track& t = tracks_[static_cast<std::size_t>(idx[j])];
+    if (t.oldPoint < 0 && t.oldObs.empty()) continue;
+    SimJoinCandidate<Scalar> cd;
+    cd.x = tv.points[j];
+    if (t.oldPoint >= 0) cd.rows.push_back({points_[static_cast<std::size_t>(t.oldPoint)].X, V3::Zero(), true});
+    for (const Obs& o : t.oldObs) {
+      const Keyframe& kf = keyframes_[static_cast<std::size_t>(o.kf)];
+      const V3 x((o.uv(0) - cam_.cx) / cam_.fx, (o.uv(1) - cam_.cy) / cam_.fy, Scalar(1));
+      cd.rows.push_back({kf.T.translation(), V3(kf.T.rotationMatrix() * x).normalized(), false});
+    }
+    if (tv.points[j](2) > Scalar(0)) depths.push_back(tv.points[j](2));
+    cands.push_back(std::move(cd));
+    candJ.push_back(static_cast<int>(j));
+  }
+  const int nc = static_cast<int>(cands.size());
+  if (nc < opt_.joinMinTracks || depths.empty()) {
+    if (opt_.log) opt_.log("frame " + std::to_string(f) + ": join to the old map: " + std::to_string(nc) + " candidate tracks, too few");
+    return false;
+  }
+  std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+  const Scalar focal = Scalar(0.5) * (cam_.fx + cam_.fy);
+  SimJoinOptions<Scalar> jo;
+  jo.thresholdRad = opt_.maxReprojPx / focal;
+  jo.noiseRad = Scalar(1) / focal;
+  jo.distanceGuess = lastMedianDepth_ > Scalar(0) ? lastMedianDepth_ : Scalar(1);
+  jo.scaleGuess = jo.distanceGuess / depths[depths.size() / 2];  // the median-depth join
+  jo.seed = 0x9e3779b9u + static_cast<std::uint32_t>(f);
+  const SimJoinResult<Scalar> r = estimateSimilarityJoin(cands, Mat3<Scalar>(Tref.rotationMatrix()), V3(Tref.translation()), jo);
+  const bool ok = r.solved && r.numInliers >= opt_.joinMinTracks && 2 * r.numInliers >= nc && r.scaleRelStd <= opt_.joinMaxScaleStd;
+  if (opt_.log) {
+    opt_.log("frame " + std::to_string(f) + ": join to the old map: " + std::to_string(nc) + " candidate tracks, " +
+             std::to_string(r.numInliers) + " agree, scale " + std::to_string(double(r.s)) + " (median-depth guess " +
+             std::to_string(double(jo.scaleGuess)) + ", relative std " + std::to_string(double(r.scaleRelStd)) +
+             "), rotation changed " +
+             std::to_string(double(r.solved ? rotationAngleDeg(Tref, SE3T(SO3<Scalar>::fromMatrix(r.R), r.c)) : Scalar(0))) +
+             " deg, centre moved " + std::to_string(double((r.c - Tref.translation()).norm())) + (ok ? ": joined" : ": not joined"));
+  }
+  if (!ok) return false;
+  Tref = SE3T(SO3<Scalar>::fromMatrix(r.R), r.c);
+  sOut = r.s;
+  for (std::size_t c = 0; c < cands.size(); ++c) {
+    if (r.inliers[c]) linked[static_cast<std::size_t>(candJ[c])] = 1;
+  }
+  return true;
+}
+
+}  // namespace hawor

@@ -1,0 +1,172 @@
+// hawor/slam/mono_slam/segment_joins.hpp — MonoSlam's joining map segments after resets: by the
+// turns' scale, by the head model.
+// Member functions of MonoSlam (slam/mono_slam.hpp: the class, its state and the overview);
+// included at the end of that header.
+#pragma once
+
+#include "../mono_slam.hpp"
+
+namespace hawor {
+
+/// Applies the position map `g` (a similarity without rotation) to the frames from f1 on, the
+/// keyframes of segment `seg` and later ones, and their points (later segments continue its
+/// scale).
+template <typename Scalar>
+template <typename G>
+void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g) {
+  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) {
+    Frame& fr = frames_[f];
+    fr.T = SE3T(fr.T.rotation(), g(V3(fr.T.translation())));
+  }
+  for (Keyframe& kf : keyframes_) {
+    if (kf.segment >= seg) kf.T = SE3T(kf.T.rotation(), g(V3(kf.T.translation())));
+  }
+  for (MapPoint& p : points_) {
+    if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
+  }
+  // The sequence refinement's points (after it ran) by their first observation.
+  for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
+    if (!seqPointObs_[j].empty() && seqPointObs_[j].front().first >= f1) seqPoints_[j] = g(V3(seqPoints_[j]));
+  }
+}
+
+/// The first keyframe of each map segment, in order.
+template <typename Scalar>
+std::vector<int> MonoSlam<Scalar>::segmentFirstKeyframes() const {
+  std::vector<int> first;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) first.push_back(static_cast<int>(k));
+  }
+  return first;
+}
+
+/// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
+/// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
+/// its scale); frames before its first keyframe (lost, not posed) are filled in later.
+template <typename Scalar>
+void MonoSlam<Scalar>::joinSegmentsByTurns() {
+  const std::vector<int> segFirstKf = segmentFirstKeyframes();
+  if (segFirstKf.size() < 2) return;
+  const int n = static_cast<int>(frames_.size());
+  std::vector<SE3T> T(static_cast<std::size_t>(n));
+  std::vector<char> usable(static_cast<std::size_t>(n));
+  auto gather = [&] {
+    for (int f = 0; f < n; ++f) {
+      T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
+      usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+    }
+  };
+  const Scalar minAngle = opt_.turnScaleMinAngleDeg * Scalar(M_PI / 180);
+  for (std::size_t i = 1; i < segFirstKf.size(); ++i) {
+    gather();
+    const int f0 = keyframes_[static_cast<std::size_t>(segFirstKf[i - 1])].frame;
+    const int f1 = keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+    const int f2 = i + 1 < segFirstKf.size() ? keyframes_[static_cast<std::size_t>(segFirstKf[i + 1])].frame : n;
+    if (opt_.headModelJoin) {
+      // One head model for both segments (head_motion.hpp): B's positions into A's units.
+      std::vector<int> idxA, idxB;
+      for (int f = std::max(f0, f1 - opt_.headModel.window); f < f1; ++f) {
+        if (usable[static_cast<std::size_t>(f)]) idxA.push_back(f);
+      }
+      for (int f = f1; f < std::min(f2, f1 + opt_.headModel.window); ++f) {
+        if (usable[static_cast<std::size_t>(f)]) idxB.push_back(f);
+      }
+      const HeadJoin<Scalar> hj = fitHeadJoin(T, idxA, idxB, opt_.headModel);
+      if (opt_.log) {
+        opt_.log("segment starting at frame " + std::to_string(f1) + ": head model over " + std::to_string(idxA.size()) + " + " +
+                 std::to_string(idxB.size()) + " frames: scale " + std::to_string(double(hj.s)) + ", R2 " +
+                 std::to_string(double(hj.fit.r2)) + ", motion R2 " + std::to_string(double(hj.fit.motionR2)) + ", front " +
+                 std::to_string(double(hj.fit.frontCos)) + ", radius spread " + std::to_string(double(hj.fit.radiusSpread)) +
+                 ", view spreads " + std::to_string(double(hj.spreadA)) + "/" + std::to_string(double(hj.spreadB)) + " deg" +
+                 (hj.ok ? ": joined" : ": not used"));
+      }
+      if (hj.ok) {
+        transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(hj.s * x + hj.t); });
+        continue;
+      }
+    }
+    if (!opt_.turnScaleJoin) continue;
+    const TurnRadius<Scalar> before = turnRadius(T, usable, f0, f1, opt_.turnScaleLag, minAngle);
+    const TurnRadius<Scalar> after = turnRadius(T, usable, f1, f2, opt_.turnScaleLag, minAngle);
+    const bool model = before.windows >= opt_.turnScaleMinWindows && after.windows >= opt_.turnScaleMinWindows &&
+                       before.spread <= opt_.turnScaleMaxSpread && after.spread <= opt_.turnScaleMaxSpread &&
+                       before.ok() && after.ok();
+    const Scalar k = model ? before.radius / after.radius : Scalar(1);
+    if (opt_.log) {
+      opt_.log("segment starting at frame " + std::to_string(f1) + ": turn radius " + std::to_string(double(before.radius)) +
+               " (" + std::to_string(before.windows) + " windows, spread " + std::to_string(double(before.spread)) +
+               ") before, " + std::to_string(double(after.radius)) + " (" + std::to_string(after.windows) +
+               " windows, spread " + std::to_string(double(after.spread)) + ") after: " +
+               (model && k > Scalar(1) / 3 && k < Scalar(3) ? "scaled by " + std::to_string(double(k)) : std::string("kept")));
+    }
+    if (!model || !(k > Scalar(1) / 3 && k < Scalar(3))) continue;
+    const V3 J = keyframes_[static_cast<std::size_t>(segFirstKf[i])].T.translation();
+    transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(J + k * (x - J)); });
+  }
+}
+
+/// SlamOptions::headModelJoinAll: the segments (first keyframes segFirstKf; segment i spans
+/// the frames from its first keyframe to the next one's) with enough posed frames and turn
+/// joined by one head model (fitHeadJoinAll, the longest segment the reference). True when it
+/// passed the tests and was applied; a segment left out moves with the one before it, and with
+/// placeShort (SlamOptions::headModelPlaceShort also on) its frames are placed by the model.
+template <typename Scalar>
+bool MonoSlam<Scalar>::joinAllSegmentsByHead(bool placeShort) {
+  const std::vector<int> segFirstKf = segmentFirstKeyframes();
+  const int n = static_cast<int>(frames_.size());
+  const std::size_t S = segFirstKf.size();
+  if (S < 2) return false;
+  std::vector<SE3T> T(static_cast<std::size_t>(n));
+  std::vector<char> usable(static_cast<std::size_t>(n));
+  for (int f = 0; f < n; ++f) {
+    T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
+    usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+  }
+  std::vector<int> first(S + 1, n);
+  for (std::size_t i = 0; i < S; ++i) first[i] = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+  const SegmentsHeadJoin<Scalar> R = joinSegmentsByHeadModel(T, usable, first, opt_.headModel);
+  const HeadJoinAll<Scalar>& J = R.join;
+  if (opt_.log) {
+    std::string sc;
+    for (std::size_t k = 0; k < J.s.size(); ++k) sc += (k ? "/" : "") + std::to_string(double(J.s[k]));
+    opt_.log("segments joined by one head model:" + R.report + " scales " + sc + ", R2 " + std::to_string(double(J.fit.r2)) +
+             ", motion R2 " + std::to_string(double(J.fit.motionR2)) + ", front " + std::to_string(double(J.fit.frontCos)) +
+             ", radius spread " + std::to_string(double(J.fit.radiusSpread)) + (R.ok ? ": joined" : ": not used"));
+  }
+  if (!R.ok) return false;
+  const std::vector<int>& groupOf = R.group;
+  // Segment by segment, in order: transformFrom moves everything from a segment on, so each
+  // joined segment gets its own similarity composed with the inverse of the one applied so far.
+  Scalar a = Scalar(1);
+  V3 b = V3::Zero();
+  for (std::size_t i = 0; i < S; ++i) {
+    if (groupOf[i] < 0) continue;
+    const Scalar s = J.s[static_cast<std::size_t>(groupOf[i])];
+    const V3 t = J.t[static_cast<std::size_t>(groupOf[i])];
+    transformFrom(first[i], keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment,
+                  [&](const V3& x) { return V3(s * (x - b) / a + t); });
+    a = s;
+    b = t;
+  }
+  // A segment too short to fix its own scale: its frames are placed by the head model instead
+  // (fillGapsByHeadModel), like lost ones.
+  if (opt_.headModelPlaceShort && placeShort) {
+    for (std::size_t i = 0; i < S; ++i) {
+      if (groupOf[i] >= 0) continue;
+      placedRanges_.emplace_back(first[i], first[i + 1]);
+      for (int f = first[i]; f < first[i + 1]; ++f) {
+        Frame& fr = frames_[static_cast<std::size_t>(f)];
+        if (!fr.posed) continue;
+        fr.posed = false;
+        fr.rotationKnown = true;
+        fr.status = SlamStatus::Interpolated;
+      }
+      // Interpolated from the joined frames around it (its own positions are in its own
+      // scale); the head model's gap filling replaces them where its tests pass.
+      fillUnposed(first[i], first[i + 1]);
+    }
+  }
+  return true;
+}
+
+}  // namespace hawor
