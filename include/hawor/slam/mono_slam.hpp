@@ -76,7 +76,7 @@
 //      current view (PLACE RECOGNITION, segmentLinks) and the poses found in the old world fix
 //      the rotation of everything after the break in finish().
 // finish(): the rotation chains after a break turned by their agreeing segment links, segments
-// re-scaled by the head's turn radius (turn_scale.hpp), a global bundle
+// joined by the head model (head_motion.hpp), a global bundle
 // adjustment over all keyframes and points (per segment: first keyframe fixed, a scale prior on
 // its first baseline), every frame's pose re-estimated against the final map from its stored 2D
 // observations (RANSAC for frames without a tracked pose, robust LM otherwise); then the
@@ -132,7 +132,6 @@
 #include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_bridge.hpp"
-#include "hawor/slam/turn_scale.hpp"
 #include "hawor/slam/two_view.hpp"
 
 namespace hawor {
@@ -227,13 +226,7 @@ struct SlamOptions {
   // 2.90 -> 5.79 %), and in fast_turns the old keyframes at the start of a turn agree with no
   // similarity (their poses are already off), so it never joins there.
   bool joinOldMap = false;
-  /// finish(): re-scale each re-initialised segment so that the eye's turn radius about the neck
-  /// (turn_scale.hpp) matches the segment before it, when both segments have turns that follow
-  /// the neck model (≥ turnScaleMinWindows windows, relative spread ≤ turnScaleMaxSpread). The
-  /// reset's scale from the median scene depth is off when the head turns to a nearer or farther
-  /// view (fast_turns seed 1: by 1.45×).
-  bool turnScaleJoin = true;
-  /// finish(), before the turn-radius join: a segment joined to the one before it by one head
+  /// finish(): a segment joined to the one before it by one head
   /// model fitted to both (head_motion.hpp fitHeadJoin: scale and offset), where it explains them.
   bool headModelJoin = true;
   /// finish(), after the sequence refinement: every segment with headModel.minFrames posed
@@ -251,10 +244,6 @@ struct SlamOptions {
   /// frames or views to fix its scale) are placed by the head model like lost frames (status
   /// Interpolated); their keyframe depths (empty) and points are left out of the result.
   bool headModelPlaceShort = true;
-  int turnScaleLag = 3;                       ///< frames per window
-  Scalar turnScaleMinAngleDeg = Scalar(3);    ///< a window's turn, at least
-  int turnScaleMinWindows = 8;
-  Scalar turnScaleMaxSpread = Scalar(0.35);
   // Relocalisation after a tracking loss, against the lost segment's map (on by default): the
   // pyramids of up to relocKeyframes keyframes at least relocSpacing frames apart are kept
   // (about 1.6 MB each at 640×480); while tracking is lost, and after the reset until a new map
@@ -601,7 +590,7 @@ class MonoSlam {
   // joining map segments after resets (mono_slam/segment_joins.hpp)
   template <typename G> void transformFrom(int f1, int seg, const G& g);
   std::vector<int> segmentFirstKeyframes() const;
-  void joinSegmentsByTurns();
+  void joinSegmentPairsByHead();
   bool joinAllSegmentsByHead(bool placeShort = true);
 
   /// Map points of the recent keyframes (kfPyr_) that no live track follows and that project

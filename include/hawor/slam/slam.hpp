@@ -18,7 +18,6 @@
 #include "pnp_ransac.hpp"
 #include "bundle_adjustment.hpp"
 #include "similarity_join.hpp"
-#include "turn_scale.hpp"
 #include "turn_bridge.hpp"
 #include "focal_refine.hpp"
 #include "sequence_refine.hpp"

@@ -262,7 +262,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   const int n = static_cast<int>(frames_.size());
   if (n == 0) return res;
   if (opt_.segmentLinks && resets_ > 0) applySegmentLinks();
-  if ((opt_.turnScaleJoin || opt_.headModelJoin) && resets_ > 0) joinSegmentsByTurns();
+  if (opt_.headModelJoin && resets_ > 0) joinSegmentPairsByHead();
   if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
     std::vector<int> all(keyframes_.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);

@@ -1,5 +1,5 @@
 // hawor/slam/mono_slam/segment_joins.hpp — MonoSlam's joining map segments after resets: by the
-// turns' scale, by the head model.
+// head model, pairwise and all at once.
 // Member functions of MonoSlam (slam/mono_slam.hpp: the class, its state and the overview);
 // included at the end of that header.
 #pragma once
@@ -40,68 +40,45 @@ std::vector<int> MonoSlam<Scalar>::segmentFirstKeyframes() const {
   return first;
 }
 
-/// SlamOptions::turnScaleJoin: each later segment scaled about its first keyframe's position
-/// by r_before / r_after (turn_scale.hpp), with everything after it (later segments continue
-/// its scale); frames before its first keyframe (lost, not posed) are filled in later.
+/// SlamOptions::headModelJoin: each later segment joined to the one before it by one head model
+/// fitted to the posed frames on both sides of the reset (head_motion.hpp fitHeadJoin: B's
+/// positions into A's units, scale and offset), where the model explains them; everything after
+/// it moves with it (later segments continue its scale); frames before its first keyframe (lost,
+/// not posed) are filled in later.
 template <typename Scalar>
-void MonoSlam<Scalar>::joinSegmentsByTurns() {
+void MonoSlam<Scalar>::joinSegmentPairsByHead() {
   const std::vector<int> segFirstKf = segmentFirstKeyframes();
   if (segFirstKf.size() < 2) return;
   const int n = static_cast<int>(frames_.size());
   std::vector<SE3T> T(static_cast<std::size_t>(n));
   std::vector<char> usable(static_cast<std::size_t>(n));
-  auto gather = [&] {
+  for (std::size_t i = 1; i < segFirstKf.size(); ++i) {
     for (int f = 0; f < n; ++f) {
       T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
       usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
     }
-  };
-  const Scalar minAngle = opt_.turnScaleMinAngleDeg * Scalar(M_PI / 180);
-  for (std::size_t i = 1; i < segFirstKf.size(); ++i) {
-    gather();
     const int f0 = keyframes_[static_cast<std::size_t>(segFirstKf[i - 1])].frame;
     const int f1 = keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
     const int f2 = i + 1 < segFirstKf.size() ? keyframes_[static_cast<std::size_t>(segFirstKf[i + 1])].frame : n;
-    if (opt_.headModelJoin) {
-      // One head model for both segments (head_motion.hpp): B's positions into A's units.
-      std::vector<int> idxA, idxB;
-      for (int f = std::max(f0, f1 - opt_.headModel.window); f < f1; ++f) {
-        if (usable[static_cast<std::size_t>(f)]) idxA.push_back(f);
-      }
-      for (int f = f1; f < std::min(f2, f1 + opt_.headModel.window); ++f) {
-        if (usable[static_cast<std::size_t>(f)]) idxB.push_back(f);
-      }
-      const HeadJoin<Scalar> hj = fitHeadJoin(T, idxA, idxB, opt_.headModel);
-      if (opt_.log) {
-        opt_.log("segment starting at frame " + std::to_string(f1) + ": head model over " + std::to_string(idxA.size()) + " + " +
-                 std::to_string(idxB.size()) + " frames: scale " + std::to_string(double(hj.s)) + ", R2 " +
-                 std::to_string(double(hj.fit.r2)) + ", motion R2 " + std::to_string(double(hj.fit.motionR2)) + ", front " +
-                 std::to_string(double(hj.fit.frontCos)) + ", radius spread " + std::to_string(double(hj.fit.radiusSpread)) +
-                 ", view spreads " + std::to_string(double(hj.spreadA)) + "/" + std::to_string(double(hj.spreadB)) + " deg" +
-                 (hj.ok ? ": joined" : ": not used"));
-      }
-      if (hj.ok) {
-        transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(hj.s * x + hj.t); });
-        continue;
-      }
+    std::vector<int> idxA, idxB;
+    for (int f = std::max(f0, f1 - opt_.headModel.window); f < f1; ++f) {
+      if (usable[static_cast<std::size_t>(f)]) idxA.push_back(f);
     }
-    if (!opt_.turnScaleJoin) continue;
-    const TurnRadius<Scalar> before = turnRadius(T, usable, f0, f1, opt_.turnScaleLag, minAngle);
-    const TurnRadius<Scalar> after = turnRadius(T, usable, f1, f2, opt_.turnScaleLag, minAngle);
-    const bool model = before.windows >= opt_.turnScaleMinWindows && after.windows >= opt_.turnScaleMinWindows &&
-                       before.spread <= opt_.turnScaleMaxSpread && after.spread <= opt_.turnScaleMaxSpread &&
-                       before.ok() && after.ok();
-    const Scalar k = model ? before.radius / after.radius : Scalar(1);
+    for (int f = f1; f < std::min(f2, f1 + opt_.headModel.window); ++f) {
+      if (usable[static_cast<std::size_t>(f)]) idxB.push_back(f);
+    }
+    const HeadJoin<Scalar> hj = fitHeadJoin(T, idxA, idxB, opt_.headModel);
     if (opt_.log) {
-      opt_.log("segment starting at frame " + std::to_string(f1) + ": turn radius " + std::to_string(double(before.radius)) +
-               " (" + std::to_string(before.windows) + " windows, spread " + std::to_string(double(before.spread)) +
-               ") before, " + std::to_string(double(after.radius)) + " (" + std::to_string(after.windows) +
-               " windows, spread " + std::to_string(double(after.spread)) + ") after: " +
-               (model && k > Scalar(1) / 3 && k < Scalar(3) ? "scaled by " + std::to_string(double(k)) : std::string("kept")));
+      opt_.log("segment starting at frame " + std::to_string(f1) + ": head model over " + std::to_string(idxA.size()) + " + " +
+               std::to_string(idxB.size()) + " frames: scale " + std::to_string(double(hj.s)) + ", R2 " +
+               std::to_string(double(hj.fit.r2)) + ", motion R2 " + std::to_string(double(hj.fit.motionR2)) + ", front " +
+               std::to_string(double(hj.fit.frontCos)) + ", radius spread " + std::to_string(double(hj.fit.radiusSpread)) +
+               ", view spreads " + std::to_string(double(hj.spreadA)) + "/" + std::to_string(double(hj.spreadB)) + " deg" +
+               (hj.ok ? ": joined" : ": not used"));
     }
-    if (!model || !(k > Scalar(1) / 3 && k < Scalar(3))) continue;
-    const V3 J = keyframes_[static_cast<std::size_t>(segFirstKf[i])].T.translation();
-    transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(J + k * (x - J)); });
+    if (hj.ok) {
+      transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(hj.s * x + hj.t); });
+    }
   }
 }
 
