@@ -63,13 +63,8 @@
 //      after the reset below, until a new map is built.
 //      Otherwise the frame is Lost, its rotation still follows the
 //      tracked rays; after lostFramesBeforeReset lost frames the system re-initialises a new map
-//      segment from the current frame and joins it to the old world: with joinOldMap (off by
-//      default) and when enough of the new two-view points were tracks seen by the old
-//      segment's keyframes, by the similarity that puts them on their old rays
-//      (similarity_join.hpp; its scale must be observable), and the new keyframes continue the
-//      old segment (those points keep their old observations, so the
-//      bundle adjustments tie both); otherwise at the frame where tracking was lost: rotation from
-//      the ray chain, position from the last estimate, scale so that the median scene depth is
+//      segment from the current frame and joins it to the old world at the frame where
+//      tracking was lost: rotation from the ray chain, position from the last estimate, scale so that the median scene depth is
 //      continuous across the join. A segment that later sees the old map again is not merged
 //      with it; but when the rotation chain to the old segment is broken (frames with no
 //      rotation, or one only carried on), the old segment's kept images are searched for the
@@ -129,7 +124,6 @@
 #include "hawor/slam/klt.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/sequence_refine.hpp"
-#include "hawor/slam/similarity_join.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_bridge.hpp"
 #include "hawor/slam/two_view.hpp"
@@ -187,7 +181,6 @@ struct SlamOptions {
   int turnHoldFrames = 5;             ///< frames it lasts after the last such increment
   int minTurnInliers = 10;                       ///< PnP inliers enough when the rays agree (turns)
   Scalar turnRotationAgreementDeg = Scalar(1);   ///< PnP vs tracked-ray rotation, for that
-  bool fewPointsRayCheck = false;  ///< the same outside turn mode (measured: no gain on hands_cover)
   /// Turn bridge (turn_bridge.hpp): in turn mode, a frame whose PnP fails right after two posed
   /// frames is posed from the last one and the tracks between them (the step's direction from a
   /// head sphere, the rotation from the tracks' epipolar geometry, the length from the map points
@@ -212,20 +205,14 @@ struct SlamOptions {
   /// rotation, and a lower bound drops them.
   Scalar maxRayJumpDeg = Scalar(6);
   // Re-finding map points that left the tracks (covered by a hand, out of view and back).
-  /// Recent keyframes whose pyramids are kept for it; 0 (default): off. Measured with 5
-  /// (bench_slam, seeds 1-2, masked, an earlier joinOldMap on): no preset consistently better
-  /// (table_work seed 1 0.15 -> 0.13 %, seed 2 1.06 -> 1.42 %; hands_cover unchanged;
-  /// fast_turns seed 1 2.7 -> 4.6 %, seed 2 5.8 -> 4.6 %).
+  /// Recent keyframes whose pyramids are kept for it; 0 (default): off. Measured with 5: the
+  /// kitchen variants backwards 4 -> 6 of 14 within 2 %, the capture set 14 -> 15 of 24 within
+  /// 1 %, but the clean seeds 1-8 fast_turns 7 -> 2, hands_cover 6 -> 4, table_work 8 -> 7
+  /// (docs/experiments.md).
   int refindKeyframes = 0;
   int refindBelow = 150;             ///< tried while fewer map points than this are tracked
   int refindMaxPoints = 200;         ///< KLT attempts a frame, at most
   Scalar refindMaxShiftPx = Scalar(6);  ///< found this close to the point's predicted projection
-  // Re-joining a re-initialised map to the old one (see joinToOldMap). Off by default: measured
-  // (bench_slam, seeds 1-2, masked/unmasked) it joins table_work seed 2 (masked 1.76 -> 1.33 %)
-  // but makes the unmasked runs worse (table_work seed 2 1.70 -> 2.89 %, hands_cover seed 1
-  // 2.90 -> 5.79 %), and in fast_turns the old keyframes at the start of a turn agree with no
-  // similarity (their poses are already off), so it never joins there.
-  bool joinOldMap = false;
   /// finish(): a segment joined to the one before it by one head
   /// model fitted to both (head_motion.hpp fitHeadJoin: scale and offset), where it explains them.
   bool headModelJoin = true;
@@ -295,8 +282,6 @@ struct SlamOptions {
   Scalar relocMaxShiftPx = Scalar(40);
   int relocMinInliers = 30;
   Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
-  int joinMinTracks = 12;                 ///< tracks with old observations agreeing with the join
-  Scalar joinMaxScaleStd = Scalar(0.05);  ///< relative standard deviation of its scale, at most
   // Keyframes and mapping.
   Scalar keyframeInlierRatio = Scalar(0.7);
   int keyframeMinInliers = 60;
@@ -493,8 +478,6 @@ class MonoSlam {
     std::vector<Obs> kfObs;  ///< keyframe observations while unmapped
     Vec2f refUv = Vec2f::Zero();  ///< position in the initialisation reference frame
     bool fromRef = false;
-    std::vector<Obs> oldObs;  ///< keyframe observations in the map segment before a reset (joinToOldMap)
-    int oldPoint = -1;        ///< its map point in that segment (−1: none)
   };
   struct Keyframe {
     int frame;
@@ -544,8 +527,6 @@ class MonoSlam {
   // initialisation (mono_slam/initialisation.hpp)
   void initialise(int f);
   void buildMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx);
-  bool joinToOldMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx, SE3T& Tref,
-      Scalar& sOut, std::vector<char>& linked);
 
   // tracking (mono_slam/tracking.hpp)
   static Scalar rotationAngleDeg(const SE3T& a, const SE3T& b);

@@ -56,7 +56,6 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"relocAnchors", [](O& o) -> T& { return o.relocAnchors; }},
       {"relocMaxPoints", [](O& o) -> T& { return o.relocMaxPoints; }},
       {"relocMinInliers", [](O& o) -> T& { return o.relocMinInliers; }},
-      {"joinMinTracks", [](O& o) -> T& { return o.joinMinTracks; }},
       {"keyframeMinInliers", [](O& o) -> T& { return o.keyframeMinInliers; }},
       {"keyframeMaxInterval", [](O& o) -> T& { return o.keyframeMaxInterval; }},
       {"keyframeMinInterval", [](O& o) -> T& { return o.keyframeMinInterval; }},
@@ -123,7 +122,6 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
       {"relocAnchorDepths", [](O& o) -> T& { return o.relocAnchorDepths; }},
       {"relocMaxShiftPx", [](O& o) -> T& { return o.relocMaxShiftPx; }},
       {"relocMaxRotationDeg", [](O& o) -> T& { return o.relocMaxRotationDeg; }},
-      {"joinMaxScaleStd", [](O& o) -> T& { return o.joinMaxScaleStd; }},
       {"keyframeInlierRatio", [](O& o) -> T& { return o.keyframeInlierRatio; }},
       {"keyframeMaxRotationDeg", [](O& o) -> T& { return o.keyframeMaxRotationDeg; }},
       {"minTriangulationDeg", [](O& o) -> T& { return o.minTriangulationDeg; }},
@@ -194,9 +192,7 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
   using T = bool;
   static const std::vector<Field<O, T>> f = {
       {"useMasks", [](O& o) -> T& { return o.useMasks; }},
-      {"fewPointsRayCheck", [](O& o) -> T& { return o.fewPointsRayCheck; }},
       {"turnBridge", [](O& o) -> T& { return o.turnBridge; }},
-      {"joinOldMap", [](O& o) -> T& { return o.joinOldMap; }},
       {"headModelJoin", [](O& o) -> T& { return o.headModelJoin; }},
       {"headModelJoinAll", [](O& o) -> T& { return o.headModelJoinAll; }},
       {"headModelJoinBeforeRefine", [](O& o) -> T& { return o.headModelJoinBeforeRefine; }},

@@ -152,30 +152,23 @@ void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const st
   SE3T Tref = frames_[static_cast<std::size_t>(refFrame_)].T;  // provisional world of the ref frame
   // The two-view map lives in the reference camera's frame with a unit baseline. Join it to
   // the existing world (first map: the reference frame's provisional pose, scale 1; after a
-  // loss: by the tracks' observations in the old map's keyframes when they determine a
-  // similarity (joinToOldMap; the new keyframes then continue the old segment), else the
-  // rotation from the rays, the position held and the scale from the median scene depth of
-  // the last map, docs/design.md §5).
+  // loss: the rotation from the rays, the position held and the scale from the median scene
+  // depth of the last map, docs/design.md §5).
   Scalar s = Scalar(1);
-  std::vector<char> linked;
-  const bool joined = everInitialised_ && opt_.joinOldMap && joinToOldMap(f, tv, idx, Tref, s, linked);
-  if (joined) --segment_;
-  if (!joined) {
-    // A new segment: the old map is no longer the one tracked. Its kept images stay for the
-    // place recognition when the rotation chain to it is broken (segmentLinks; else the images
-    // kept from an earlier break stay, for the same chain).
-    if (opt_.segmentLinks && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
-      linkPyr_.swap(relocPyr_);
-      // The segment's last keyframe too: a break comes in a turn, and the head often turns back.
-      if (lastKfPyr_.kf >= 0 && std::none_of(linkPyr_.begin(), linkPyr_.end(), [&](const KeyframePyramid& e) { return e.kf == lastKfPyr_.kf; })) {
-        linkPyr_.push_back(std::move(lastKfPyr_));
-      }
+  // A new segment: the old map is no longer the one tracked. Its kept images stay for the
+  // place recognition when the rotation chain to it is broken (segmentLinks; else the images
+  // kept from an earlier break stay, for the same chain).
+  if (opt_.segmentLinks && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
+    linkPyr_.swap(relocPyr_);
+    // The segment's last keyframe too: a break comes in a turn, and the head often turns back.
+    if (lastKfPyr_.kf >= 0 && std::none_of(linkPyr_.begin(), linkPyr_.end(), [&](const KeyframePyramid& e) { return e.kf == lastKfPyr_.kf; })) {
+      linkPyr_.push_back(std::move(lastKfPyr_));
     }
-    relocPyr_.clear();
-    lastKfPyr_ = KeyframePyramid();
   }
+  relocPyr_.clear();
+  lastKfPyr_ = KeyframePyramid();
   const int seg = segment_;
-  if (!joined && everInitialised_ && lastMedianDepth_ > Scalar(0)) {
+  if (everInitialised_ && lastMedianDepth_ > Scalar(0)) {
     std::vector<Scalar> d;
     for (std::size_t j = 0; j < idx.size(); ++j) {
       if (tv.triangulated[j] && tv.points[j](2) > Scalar(0)) d.push_back(tv.points[j](2));
@@ -198,30 +191,16 @@ void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const st
   for (std::size_t j = 0; j < idx.size(); ++j) {
     Track& t = tracks_[static_cast<std::size_t>(idx[j])];
     const V2 u0(Scalar(t.refUv(0)), Scalar(t.refUv(1))), u1(Scalar(t.uv(0)), Scalar(t.uv(1)));
-    if (tv.triangulated[j] && joined && linked[j] && t.oldPoint >= 0) {
-      // The same physical point as an old map point: one point, observed by both segments.
-      MapPoint& p = points_[static_cast<std::size_t>(t.oldPoint)];
-      p.obs.push_back(Obs{k0, u0});
-      p.obs.push_back(Obs{k0 + 1, u1});
-      keyframes_[static_cast<std::size_t>(k0)].points.push_back(t.oldPoint);
-      keyframes_[static_cast<std::size_t>(k0 + 1)].points.push_back(t.oldPoint);
-      t.point = t.oldPoint;
-      trackPoint_[static_cast<std::size_t>(t.id)] = t.oldPoint;
-    } else if (tv.triangulated[j]) {
+    if (tv.triangulated[j]) {
       MapPoint p;
       p.X = toWorld(tv.points[j]);
       p.obs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
-      if (joined && linked[j]) p.obs.insert(p.obs.begin(), t.oldObs.begin(), t.oldObs.end());
       t.point = addPoint(std::move(p), t.id);
     } else {
       t.kfObs = {Obs{k0, u0}, Obs{k0 + 1, u1}};
     }
   }
-  for (Track& t : tracks_) {
-    t.fromRef = false;
-    t.oldObs.clear();
-    t.oldPoint = -1;
-  }
+  for (Track& t : tracks_) t.fromRef = false;
   Frame& fr = frames_.back();
   fr.T = T1;
   fr.posed = true;
@@ -240,68 +219,6 @@ void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const st
   afterLoss_ = false;
   lost_ = 0;
   closeKeyframe(fr);
-}
-
-/// After a reset, the similarity taking the new two-view map (reference camera frame, unit
-/// baseline) into the old world (similarity_join.hpp), from the tracks the old segment saw:
-/// their rays in the old keyframes, or their old map points; started at the reference frame's
-/// rotation from the ray chain and its held position. Accepted with joinMinTracks inliers (half
-/// of the candidates at least) and the scale known to joinMaxScaleStd: old keyframes too close
-/// to the new cameras leave it unobservable, and the median-depth join is kept. `linked`: per
-/// idx entry, the tracks that agree.
-template <typename Scalar>
-bool MonoSlam<Scalar>::joinToOldMap(int f, const TwoViewResult<Scalar>& tv, const std::vector<int>& idx,
-    SE3T& Tref, Scalar& sOut, std::vector<char>& linked) {
-  linked.assign(idx.size(), 0);
-  std::vector<SimJoinCandidate<Scalar>> cands;
-  std::vector<int> candJ;
-  std::vector<Scalar> depths;
-  for (std::size_t j = 0; j < idx.size(); ++j) {
-    if (!tv.triangulated[j]) continue;
-    const Track& t = tracks_[static_cast<std::size_t>(idx[j])];
-    if (t.oldPoint < 0 && t.oldObs.empty()) continue;
-    SimJoinCandidate<Scalar> cd;
-    cd.x = tv.points[j];
-    if (t.oldPoint >= 0) cd.rows.push_back({points_[static_cast<std::size_t>(t.oldPoint)].X, V3::Zero(), true});
-    for (const Obs& o : t.oldObs) {
-      const Keyframe& kf = keyframes_[static_cast<std::size_t>(o.kf)];
-      const V3 x((o.uv(0) - cam_.cx) / cam_.fx, (o.uv(1) - cam_.cy) / cam_.fy, Scalar(1));
-      cd.rows.push_back({kf.T.translation(), V3(kf.T.rotationMatrix() * x).normalized(), false});
-    }
-    if (tv.points[j](2) > Scalar(0)) depths.push_back(tv.points[j](2));
-    cands.push_back(std::move(cd));
-    candJ.push_back(static_cast<int>(j));
-  }
-  const int nc = static_cast<int>(cands.size());
-  if (nc < opt_.joinMinTracks || depths.empty()) {
-    if (opt_.log) opt_.log("frame " + std::to_string(f) + ": join to the old map: " + std::to_string(nc) + " candidate tracks, too few");
-    return false;
-  }
-  std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-  const Scalar focal = Scalar(0.5) * (cam_.fx + cam_.fy);
-  SimJoinOptions<Scalar> jo;
-  jo.thresholdRad = opt_.maxReprojPx / focal;
-  jo.noiseRad = Scalar(1) / focal;
-  jo.distanceGuess = lastMedianDepth_ > Scalar(0) ? lastMedianDepth_ : Scalar(1);
-  jo.scaleGuess = jo.distanceGuess / depths[depths.size() / 2];  // the median-depth join
-  jo.seed = 0x9e3779b9u + static_cast<std::uint32_t>(f);
-  const SimJoinResult<Scalar> r = estimateSimilarityJoin(cands, Mat3<Scalar>(Tref.rotationMatrix()), V3(Tref.translation()), jo);
-  const bool ok = r.solved && r.numInliers >= opt_.joinMinTracks && 2 * r.numInliers >= nc && r.scaleRelStd <= opt_.joinMaxScaleStd;
-  if (opt_.log) {
-    opt_.log("frame " + std::to_string(f) + ": join to the old map: " + std::to_string(nc) + " candidate tracks, " +
-             std::to_string(r.numInliers) + " agree, scale " + std::to_string(double(r.s)) + " (median-depth guess " +
-             std::to_string(double(jo.scaleGuess)) + ", relative std " + std::to_string(double(r.scaleRelStd)) +
-             "), rotation changed " +
-             std::to_string(double(r.solved ? rotationAngleDeg(Tref, SE3T(SO3<Scalar>::fromMatrix(r.R), r.c)) : Scalar(0))) +
-             " deg, centre moved " + std::to_string(double((r.c - Tref.translation()).norm())) + (ok ? ": joined" : ": not joined"));
-  }
-  if (!ok) return false;
-  Tref = SE3T(SO3<Scalar>::fromMatrix(r.R), r.c);
-  sOut = r.s;
-  for (std::size_t c = 0; c < cands.size(); ++c) {
-    if (r.inliers[c]) linked[static_cast<std::size_t>(candJ[c])] = 1;
-  }
-  return true;
 }
 
 }  // namespace hawor

@@ -76,11 +76,7 @@ bool MonoSlam<Scalar>::relocalise(int f) {
     --resets_;
     segment_ = keyframes_.back().segment;
     for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
-    for (Track& t : tracks_) {
-      t.fromRef = false;
-      t.oldObs.clear();
-      t.oldPoint = -1;
-    }
+    for (Track& t : tracks_) t.fromRef = false;
     state_ = State::Tracking;
   }
   afterLoss_ = false;

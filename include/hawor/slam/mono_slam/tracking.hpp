@@ -60,7 +60,7 @@ void MonoSlam<Scalar>::trackPose(int f) {
   // near-exact for a rotation-dominant motion) and most of the points are inliers.
   const int needed = std::min(opt_.minInliers, opt_.minTurnInliers);
   Mat3<Scalar> dRays;
-  const bool haveRays = (turning_ || opt_.fewPointsRayCheck) && static_cast<int>(X.size()) < 2 * opt_.minInliers && rayRotation(dRays);
+  const bool haveRays = turning_ && static_cast<int>(X.size()) < 2 * opt_.minInliers && rayRotation(dRays);
   if (static_cast<int>(X.size()) >= (haveRays ? needed : opt_.minInliers)) {
     PnPRansacOptions<Scalar> po = opt_.pnp;
     po.seed = opt_.pnp.seed + static_cast<std::uint32_t>(f);
@@ -133,12 +133,7 @@ void MonoSlam<Scalar>::trackPose(int f) {
     ++segment_;
     segmentStart_ = f;
     // The tracks go on, under new ids: their old observations keep mapping to the old points.
-    // Their observations in the old segment's keyframes (or their old points) are kept to join
-    // the new map to the old one (joinToOldMap).
     for (Track& t : tracks_) {
-      t.oldPoint = t.point >= 0 && points_[static_cast<std::size_t>(t.point)].valid ? t.point : -1;
-      t.oldObs.clear();
-      if (t.oldPoint < 0) std::swap(t.oldObs, t.kfObs);
       t.point = -1;
       t.kfObs.clear();
       const int oldId = t.id;
