@@ -61,7 +61,8 @@ def declared_options():
         return re.findall(r"^\s+(?:int|Scalar|float|bool)\s+(\w+)\s*=", body, re.M)
 
     names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
-    for prefix, header, struct in (("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
+    for prefix, header, struct in (("keyframe", "keyframe_policy.hpp", "KeyframePolicyOptions"),
+                                   ("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
                                    ("twoView", "two_view.hpp", "TwoViewOptions"),
                                    ("pnp", "pnp_ransac.hpp", "PnPRansacOptions"),
                                    ("bridge", "turn_bridge.hpp", "TurnBridgeOptions"),

@@ -41,7 +41,7 @@
 //      tracked and the tracks triangulated from the two posed frames; the frame becomes a
 //      keyframe, so the tracks born in the turn are triangulated and the map goes on.
 //   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
-//      an absolute count, after a maximum interval, or in turn mode after keyframeMaxRotationDeg
+//      an absolute count, after a maximum interval, or in turn mode after keyframe.maxRotationDeg
 //      of rotation (new corners only come at keyframes). REVISITS first (revisitSearch, on): the
 //      points of kept keyframes (relocalisation's) of this segment that looked at the current view
 //      a while ago are searched under the current pose, and kept as tracks of those old points when
@@ -121,6 +121,7 @@
 #include "hawor/slam/hand_mask.hpp"
 #include "hawor/slam/head_motion.hpp"
 #include "hawor/slam/image_pyramid.hpp"
+#include "hawor/slam/keyframe_policy.hpp"
 #include "hawor/slam/klt.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/sequence_refine.hpp"
@@ -283,12 +284,7 @@ struct SlamOptions {
   int relocMinInliers = 30;
   Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
   // Keyframes and mapping.
-  Scalar keyframeInlierRatio = Scalar(0.7);
-  int keyframeMinInliers = 60;
-  int keyframeMaxInterval = 10;
-  int keyframeMinInterval = 3;
-  int keyframeThinInterval = 1;   ///< frames between keyframes while fewer than 2·minInliers are mapped (2: mixed)
-  Scalar keyframeMaxRotationDeg = Scalar(12);  ///< a keyframe after this much rotation (head turns)
+  KeyframePolicyOptions<Scalar> keyframe;  ///< when a tracked frame becomes one (keyframe_policy.hpp)
   Scalar minTriangulationDeg = Scalar(0.6);
   Scalar maxReprojPx = Scalar(3);
   int windowKeyframes = 7;
@@ -380,11 +376,12 @@ class MonoSlam {
       throw Error("MonoSlam: the intrinsics must be finite with fx, fy > 0");
     }
     if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
-        opt_.keyframeMaxInterval < 1 || opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
+        opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
         opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0)) ||
         !(std::abs(opt_.rollingShutter) <= Scalar(1))) {
       throw Error("MonoSlam: invalid options");
     }
+    opt_.keyframe.validate();
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
     // every focal refinement's prior stays on the focal given here (or focal.priorFx)
     if (!(opt_.focal.priorFx > Scalar(0))) opt_.focal.priorFx = cam_.fx;

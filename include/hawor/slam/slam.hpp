@@ -9,6 +9,7 @@
 #include "hand_mask.hpp"
 #include "corners.hpp"
 #include "klt.hpp"
+#include "keyframe_policy.hpp"
 #include "ransac.hpp"
 #include "essential.hpp"
 #include "homography.hpp"

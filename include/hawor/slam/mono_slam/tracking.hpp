@@ -96,19 +96,16 @@ void MonoSlam<Scalar>::trackPose(int f) {
     fr.status = SlamStatus::Tracked;
     lost_ = 0;
     ++framesSinceKf_;
-    const int mapped = fr.inliers;
-    // A keyframe when the map thins out (but not more often than keyframeMinInterval unless
-    // tracking is about to fail) or after keyframeMaxInterval frames.
-    const bool thin = mapped < opt_.keyframeMinInliers || Scalar(mapped) < opt_.keyframeInlierRatio * Scalar(lastKfInliers_);
-    // Rotation-aware (turn mode): a head turn sweeps the map out of view within a few frames,
-    // and new corners are only detected at keyframes, so a keyframe every
-    // keyframeMaxRotationDeg of rotation keeps the leading edge of the view seeded (its tracks
-    // are triangulated once the neck's translation gives them parallax).
-    const bool swept = turning_ && rotationAngleDeg(keyframes_.back().T, fr.T) > opt_.keyframeMaxRotationDeg;
-    if (framesSinceKf_ >= opt_.keyframeMaxInterval || (thin && framesSinceKf_ >= opt_.keyframeMinInterval) ||
-        (mapped < 2 * opt_.minInliers && framesSinceKf_ >= opt_.keyframeThinInterval) || swept) {
-      insertKeyframe(f);
-    }
+    // A keyframe when the map thins out, tracking is about to fail, a turn sweeps the view, or
+    // after a maximum interval (keyframe_policy.hpp).
+    KeyframeQuery<Scalar> q;
+    q.mappedInliers = fr.inliers;
+    q.lastKeyframeInliers = lastKfInliers_;
+    q.framesSinceKeyframe = framesSinceKf_;
+    q.trackingMinInliers = opt_.minInliers;
+    q.turning = turning_;
+    q.rotationSinceKeyframeDeg = turning_ ? rotationAngleDeg(keyframes_.back().T, fr.T) : Scalar(0);
+    if (keyframeReason(q, opt_.keyframe) != KeyframeReason::None) insertKeyframe(f);
     return;
   }
   // Lost: rotation from the rays, position held; relocalisation against the map; after a few
