@@ -64,7 +64,7 @@ const char* kSlamHelp =
     "                        is the guess (the trajectory then uses the refined focal)\n"
     "  --focal-prior S       std of log(f / guess) of the guess (default 0.3, a FOV guess)\n"
     "  --set NAME=VALUE,...  set SlamOptions fields by name, for ablations (for example\n"
-    "                        --set initMinRotationDeg=90,relocalise=false; twoView.NAME for\n"
+    "                        --set init.minRotationDeg=9,relocalise=false; twoView.NAME for\n"
     "                        the initialisation's); an unknown name lists the known ones\n"
     "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
     "                        PnP, keyframes, losses)\n"

@@ -61,7 +61,8 @@ def declared_options():
         return re.findall(r"^\s+(?:int|Scalar|float|bool)\s+(\w+)\s*=", body, re.M)
 
     names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
-    for prefix, header, struct in (("keyframe", "keyframe_policy.hpp", "KeyframePolicyOptions"),
+    for prefix, header, struct in (("init", "mono_slam.hpp", "SlamInitOptions"),
+                                   ("keyframe", "keyframe_policy.hpp", "KeyframePolicyOptions"),
                                    ("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
                                    ("twoView", "two_view.hpp", "TwoViewOptions"),
                                    ("pnp", "pnp_ransac.hpp", "PnPRansacOptions"),
@@ -82,7 +83,7 @@ def check_set_option(seq, intr, tmp):
     declared = declared_options()
     check("--set knows every declared option", known == declared,
           ("missing", sorted(declared - known), "extra", sorted(known - declared)))
-    for bad, word in (("minInliers=2.5", "integer"), ("useMasks=yes", "true"), ("initMinFlowPx=nan", "number"),
+    for bad, word in (("minInliers=2.5", "integer"), ("useMasks=yes", "true"), ("init.minFlowPx=nan", "number"),
                       ("klt.maxResidual=", "number"), ("minInliers", "NAME=VALUE"), ("=3", "NAME=VALUE")):
         rc, _, err = run(*base, "--out", os.path.join(tmp, "s.tum"), "--set", bad)
         check("--set %s refused" % bad, rc == 2 and word in err, err)

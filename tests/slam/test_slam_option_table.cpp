@@ -12,20 +12,20 @@ TEMPLATE_TEST_CASE("setSlamOptions sets fields by name", "[slam][options]", floa
   using O = hawor::SlamOptions<TestType>;
   O o;
   const O d;
-  hawor::setSlamOptions(o, "initMinTracks=41,initMinFlowPx=2.5,relocalise=false,klt.maxResidual=9,twoView.minTriangulated=12,"
+  hawor::setSlamOptions(o, "init.minTracks=41,init.minFlowPx=2.5,relocalise=false,klt.maxResidual=9,twoView.minTriangulated=12,"
                            "pnp.thresholdPx=1.5,corners.cellSize=16,useMasks=0");
-  CHECK(o.initMinTracks == 41);
-  CHECK(o.initMinFlowPx == TestType(2.5));
+  CHECK(o.init.minTracks == 41);
+  CHECK(o.init.minFlowPx == TestType(2.5));
   CHECK(o.relocalise == false);
   CHECK(o.klt.maxResidual == 9.0f);
   CHECK(o.twoView.minTriangulated == 12);
   CHECK(o.pnp.thresholdPx == TestType(1.5));
   CHECK(o.corners.cellSize == 16);
   CHECK(o.useMasks == false);
-  CHECK(o.reinitMinTracks == d.reinitMinTracks);  // untouched
+  CHECK(o.init.reinitMinTracks == d.init.reinitMinTracks);  // untouched
   CHECK(o.twoView.minParallaxDeg == d.twoView.minParallaxDeg);
   hawor::setSlamOptions(o, "");  // nothing
-  CHECK(o.initMinTracks == 41);
+  CHECK(o.init.minTracks == 41);
   // every listed name accepts a value of its kind
   for (const std::string& n : hawor::slamOptionNames<TestType>()) {
     O p;
@@ -50,13 +50,13 @@ TEMPLATE_TEST_CASE("setSlamOptions refuses malformed settings", "[slam][options]
     return false;
   };
   CHECK(refused("noSuch=1", "noSuch"));
-  CHECK(refused("noSuch=1", "initMinTracks"));  // the known names listed
-  CHECK(refused("initMinTracks=4.5", "integer"));
-  CHECK(refused("initMinTracks=1e12", "integer"));
-  CHECK(refused("initMinFlowPx=inf", "finite"));
-  CHECK(refused("initMinFlowPx=3px", "finite"));
+  CHECK(refused("noSuch=1", "init.minTracks"));  // the known names listed
+  CHECK(refused("init.minTracks=4.5", "integer"));
+  CHECK(refused("init.minTracks=1e12", "integer"));
+  CHECK(refused("init.minFlowPx=inf", "finite"));
+  CHECK(refused("init.minFlowPx=3px", "finite"));
   CHECK(refused("relocalise=yes", "true, false"));
   CHECK(refused("relocalise", "NAME=VALUE"));
   CHECK(refused("=1", "NAME=VALUE"));
-  CHECK(refused("initMinTracks=40,,", "NAME=VALUE"));
+  CHECK(refused("init.minTracks=40,,", "NAME=VALUE"));
 }

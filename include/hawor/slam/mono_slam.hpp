@@ -16,11 +16,11 @@
 //      sees them moved to the middle row's time under the last frame's raw-pixel rotation.
 //   3. Before a map exists: two-view initialisation (two_view.hpp: E or H by GRIC, RANSAC)
 //      between a reference frame and the current one once the median flow is large enough; the
-//      reference is the oldest of the last initMaxGap frames sharing initMinTracks tracks (their
+//      reference is the oldest of the last init.maxGap frames sharing init.minTracks tracks (their
 //      observations are kept per frame; new corners join whenever the tracks thin out, so that a
 //      recent reference exists while hands sweep the old tracks away); in turn mode the pair is
 //      also tried after
-//      initMinRotationDeg of rotation (the rays' rotation absorbs most of the parallax of the
+//      init.minRotationDeg of rotation (the rays' rotation absorbs most of the parallax of the
 //      neck's sideways translation, so the compensated flow understates it). The rotation of
 //      not-yet-initialised frames comes from the tracked rays (Kabsch, pure-rotation
 //      hypothesis) with the position held; a track more than maxRayJumpDeg off that rotation
@@ -86,7 +86,7 @@
 // (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (docs/design.md §6).
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
-// the last initMaxGap frames while no map exists); with re-finding on, the pyramids of the last
+// the last init.maxGap frames while no map exists); with re-finding on, the pyramids of the last
 // refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to
 // relocAnchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; after
 // a broken rotation chain, until its links are found, the lost segment's too (segmentLinks); no
@@ -149,6 +149,30 @@ inline const char* slamStatusName(SlamStatus s) {
   return "unknown";
 }
 
+/// Initialisation of a map segment (mono_slam/initialisation.hpp): the two-view pair's reference
+/// and when the pair is tried.
+template <typename Scalar>
+struct SlamInitOptions {
+  Scalar minFlowPx = Scalar(4);       ///< median rotation-compensated flow before trying
+  int everyFrames = 3;                ///< frames between two-view attempts
+  int minTracks = 60;
+  int reinitMinTracks = 60;           ///< minTracks after a tracking loss (40 measured: no gain)
+  int maxGap = 60;                    ///< the two-view reference is one of the last this many frames
+  Scalar minRotationDeg = Scalar(8);  ///< in turn mode: try after this much rotation (every other frame)
+  /// Every second frame between the reference and the current one as further views that settle
+  /// a two-fold ambiguity (a planar scene's homography; two_view.hpp).
+  bool thirdView = true;
+
+  /// Throws hawor::Error naming the first bad field.
+  void validate() const {
+    if (!(minFlowPx >= Scalar(0))) throw Error("init.minFlowPx must be >= 0");
+    if (everyFrames < 1) throw Error("init.everyFrames must be >= 1");
+    if (minTracks < 8 || reinitMinTracks < 8) throw Error("init.minTracks and init.reinitMinTracks must be >= 8");
+    if (maxGap < 1) throw Error("init.maxGap must be >= 1");
+    if (!(minRotationDeg > Scalar(0))) throw Error("init.minRotationDeg must be > 0");
+  }
+};
+
 template <typename Scalar>
 struct SlamOptions {
   int pyramidLevels = 4;
@@ -168,12 +192,7 @@ struct SlamOptions {
   int maskBlock = 4;                ///< keyframe mask resolution (pixels per bit)
   // Initialisation.
   TwoViewOptions<Scalar> twoView;
-  Scalar initMinFlowPx = Scalar(4);   ///< median rotation-compensated flow before trying
-  int initEveryFrames = 3;            ///< frames between two-view attempts
-  int initMinTracks = 60;
-  int reinitMinTracks = 60;           ///< initMinTracks after a tracking loss (40 measured: no gain)
-  int initMaxGap = 60;                ///< the two-view reference is one of the last this many frames
-  Scalar initMinRotationDeg = Scalar(8);  ///< in turn mode: try after this much rotation (every other frame)
+  SlamInitOptions<Scalar> init;     ///< when and from which pair a map segment starts
   // Tracking.
   PnPRansacOptions<Scalar> pnp;
   int minInliers = 25;
@@ -240,9 +259,6 @@ struct SlamOptions {
   // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
   // puts the frame back in the old map, and the old segment goes on (no new scale).
   bool relocalise = true;
-  /// Two-view initialisation: every second frame between the reference and the current one as
-  /// further views that settle a two-fold ambiguity (a planar scene's homography; two_view.hpp).
-  bool twoViewThirdView = true;
   /// At each keyframe, search the kept keyframes (relocalise's) that saw the current view a while
   /// ago (searchRevisits); needs relocalise.
   bool revisitSearch = true;
@@ -381,6 +397,7 @@ class MonoSlam {
         !(std::abs(opt_.rollingShutter) <= Scalar(1))) {
       throw Error("MonoSlam: invalid options");
     }
+    opt_.init.validate();
     opt_.keyframe.validate();
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
     // every focal refinement's prior stays on the focal given here (or focal.priorFx)

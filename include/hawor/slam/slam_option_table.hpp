@@ -1,8 +1,8 @@
 // hawor/slam/slam_option_table.hpp — SlamOptions by name: `setSlamOption(options, "initMinTracks",
 // "40")`, for tools that try a setting without a rebuild (`hawor slam --set NAME=VALUE,...`, the
 // SLAM benchmarks' ablations). The numeric and boolean fields of SlamOptions and of its
-// parts' option structs (keyframe., corners., klt., twoView., pnp., bridge., sequence.,
-// headModel., focal. NAME); values are checked (an integer for an int, a finite number,
+// parts' option structs (init., keyframe., corners., klt., twoView., pnp., bridge.,
+// sequence., headModel., focal. NAME); values are checked (an integer for an int, a finite number,
 // true/false/1/0 for a bool) and an unknown name is an error that lists the known ones.
 #pragma once
 
@@ -30,10 +30,6 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"maxFeatures", [](O& o) -> T& { return o.maxFeatures; }},
       {"maskDilatePx", [](O& o) -> T& { return o.maskDilatePx; }},
       {"maskBlock", [](O& o) -> T& { return o.maskBlock; }},
-      {"initEveryFrames", [](O& o) -> T& { return o.initEveryFrames; }},
-      {"initMinTracks", [](O& o) -> T& { return o.initMinTracks; }},
-      {"reinitMinTracks", [](O& o) -> T& { return o.reinitMinTracks; }},
-      {"initMaxGap", [](O& o) -> T& { return o.initMaxGap; }},
       {"minInliers", [](O& o) -> T& { return o.minInliers; }},
       {"turnHoldFrames", [](O& o) -> T& { return o.turnHoldFrames; }},
       {"minTurnInliers", [](O& o) -> T& { return o.minTurnInliers; }},
@@ -61,6 +57,10 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"globalIterations", [](O& o) -> T& { return o.globalIterations; }},
       {"focalMaxFrames", [](O& o) -> T& { return o.focalMaxFrames; }},
       {"focalFrameSpacing", [](O& o) -> T& { return o.focalFrameSpacing; }},
+      {"init.everyFrames", [](O& o) -> T& { return o.init.everyFrames; }},
+      {"init.minTracks", [](O& o) -> T& { return o.init.minTracks; }},
+      {"init.reinitMinTracks", [](O& o) -> T& { return o.init.reinitMinTracks; }},
+      {"init.maxGap", [](O& o) -> T& { return o.init.maxGap; }},
       {"keyframe.minInliers", [](O& o) -> T& { return o.keyframe.minInliers; }},
       {"keyframe.maxInterval", [](O& o) -> T& { return o.keyframe.maxInterval; }},
       {"keyframe.minInterval", [](O& o) -> T& { return o.keyframe.minInterval; }},
@@ -104,8 +104,6 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
   using T = Scalar;
   static const std::vector<Field<O, T>> f = {
       {"rollingShutter", [](O& o) -> T& { return o.rollingShutter; }},
-      {"initMinFlowPx", [](O& o) -> T& { return o.initMinFlowPx; }},
-      {"initMinRotationDeg", [](O& o) -> T& { return o.initMinRotationDeg; }},
       {"turnRateDeg", [](O& o) -> T& { return o.turnRateDeg; }},
       {"turnRotationAgreementDeg", [](O& o) -> T& { return o.turnRotationAgreementDeg; }},
       {"bridgeMinParallaxDeg", [](O& o) -> T& { return o.bridgeMinParallaxDeg; }},
@@ -125,6 +123,8 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
       {"minTriangulationDeg", [](O& o) -> T& { return o.minTriangulationDeg; }},
       {"maxReprojPx", [](O& o) -> T& { return o.maxReprojPx; }},
       {"focalMinStd", [](O& o) -> T& { return o.focalMinStd; }},
+      {"init.minFlowPx", [](O& o) -> T& { return o.init.minFlowPx; }},
+      {"init.minRotationDeg", [](O& o) -> T& { return o.init.minRotationDeg; }},
       {"keyframe.inlierRatio", [](O& o) -> T& { return o.keyframe.inlierRatio; }},
       {"keyframe.maxRotationDeg", [](O& o) -> T& { return o.keyframe.maxRotationDeg; }},
       {"twoView.focalPx", [](O& o) -> T& { return o.twoView.focalPx; }},
@@ -198,7 +198,6 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
       {"headModelJoinBeforeRefine", [](O& o) -> T& { return o.headModelJoinBeforeRefine; }},
       {"headModelPlaceShort", [](O& o) -> T& { return o.headModelPlaceShort; }},
       {"relocalise", [](O& o) -> T& { return o.relocalise; }},
-      {"twoViewThirdView", [](O& o) -> T& { return o.twoViewThirdView; }},
       {"revisitSearch", [](O& o) -> T& { return o.revisitSearch; }},
       {"segmentLinks", [](O& o) -> T& { return o.segmentLinks; }},
       {"globalBundleAdjustment", [](O& o) -> T& { return o.globalBundleAdjustment; }},
@@ -206,6 +205,7 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
       {"sequenceRefine", [](O& o) -> T& { return o.sequenceRefine; }},
       {"headModelFill", [](O& o) -> T& { return o.headModelFill; }},
       {"refineFocal", [](O& o) -> T& { return o.refineFocal; }},
+      {"init.thirdView", [](O& o) -> T& { return o.init.thirdView; }},
       {"klt.forwardBackward", [](O& o) -> T& { return o.klt.forwardBackward; }},
       {"twoView.essentialOverPlane", [](O& o) -> T& { return o.twoView.essentialOverPlane; }},
       {"twoView.refine", [](O& o) -> T& { return o.twoView.refine; }},

@@ -23,16 +23,16 @@ void MonoSlam<Scalar>::initialise(int f) {
   fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
   if (afterLoss_ && relocalise(f)) return;
   // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
-  // tracks), or any of the last initMaxGap frames (their tracks are in the per-frame
-  // observations, their rotations from the rays): the oldest of them sharing initMinTracks
+  // tracks), or any of the last init.maxGap frames (their tracks are in the per-frame
+  // observations, their rotations from the rays): the oldest of them sharing init.minTracks
   // tracks. During a head turn the tracks live only a few frames, and while hands sweep over a
   // slowly moving view they die one by one: a fixed reference would lose them all before the
   // motion gives parallax (hands_cover seed 7 never initialised in 300 frames).
   fr.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
-  const int window = f - opt_.initMaxGap;
+  const int window = f - opt_.init.maxGap;
   if (window - 1 >= 0 && window - 1 != refFrame_) frames_[static_cast<std::size_t>(window - 1)].mask = CoarseMask();
   const int oldest = std::max(segmentStart_, std::min(refFrame_, window));
-  const int minTracks = afterLoss_ ? opt_.reinitMinTracks : opt_.initMinTracks;
+  const int minTracks = afterLoss_ ? opt_.init.reinitMinTracks : opt_.init.minTracks;
   int bestG = -1, refAlive = 0;
   float bestFlow = -1;
   std::vector<int> bestIdx, bestOther;
@@ -69,8 +69,8 @@ void MonoSlam<Scalar>::initialise(int f) {
   // flow is compensated with the rays' rotation, which under a sideways head translation
   // absorbs most of the parallax (the rotation–translation ambiguity); the two-view decides.
   const Scalar turnedDeg = bestG >= 0 ? rotationAngleDeg(frames_[static_cast<std::size_t>(bestG)].T, fr.T) : Scalar(0);
-  const bool fastTurn = bestG >= 0 && turning_ && turnedDeg >= opt_.initMinRotationDeg;
-  const bool tryNow = bestG >= 0 && ((bestFlow >= float(opt_.initMinFlowPx) && f - lastInitAttempt_ >= opt_.initEveryFrames) ||
+  const bool fastTurn = bestG >= 0 && turning_ && turnedDeg >= opt_.init.minRotationDeg;
+  const bool tryNow = bestG >= 0 && ((bestFlow >= float(opt_.init.minFlowPx) && f - lastInitAttempt_ >= opt_.init.everyFrames) ||
                                      (fastTurn && f - lastInitAttempt_ >= 2));
   if (tryNow) {
     lastInitAttempt_ = f;
@@ -84,7 +84,7 @@ void MonoSlam<Scalar>::initialise(int f) {
     // (two_view.hpp): the head's sway curves, and a view off the pair's line of motion fits
     // only the true plane.
     std::vector<std::vector<V2>> x3;
-    if (opt_.twoViewThirdView) {
+    if (opt_.init.thirdView) {
       const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
       for (int mid = bestG + 2; mid < f; mid += 2) {
         const Frame& mf = frames_[static_cast<std::size_t>(mid)];
