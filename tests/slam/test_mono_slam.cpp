@@ -182,7 +182,7 @@ TEST_CASE("MonoSlam: a turn under a hand that covers the view keeps turning (coa
   // 9 deg) the turn loses 8.5 deg; held, it loses everything turned under the hand, and every
   // later frame keeps that offset.
   hawor::SlamOptions<double> on, off;
-  off.coastFrames = 0;
+  off.turn.coastFrames = 0;
   const Run r = runPreset("fast_turns", 60, true, 1, 42, 44, on);
   const Run q = runPreset("fast_turns", 60, true, 1, 42, 44, off);
   double turned = 0;  // the truth's turn under the hand
@@ -293,11 +293,17 @@ TEST_CASE("MonoSlam: bad input gives errors or statuses, never a crash", "[slam]
   }
   SECTION("invalid options") {
     hawor::SlamOptions<double> o;
-    o.coastFrames = -1;
-    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("invalid options"));
+    o.turn.coastFrames = -1;
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("turn.coastFrames"));
     o = hawor::SlamOptions<double>();
-    o.coastMaxStepDeg = std::nan("");
-    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("invalid options"));
+    o.turn.coastMaxStepDeg = std::nan("");
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("turn.coastMaxStepDeg"));
+    o = hawor::SlamOptions<double>();
+    o.init.maxGap = 0;
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("init.maxGap"));
+    o = hawor::SlamOptions<double>();
+    o.keyframe.maxInterval = 0;
+    CHECK_THROWS_WITH(hawor::MonoSlam<double>(cam, o), Catch::Contains("keyframe.maxInterval"));
     o = hawor::SlamOptions<double>();
     CHECK_NOTHROW(hawor::MonoSlam<double>(cam, o));
   }

@@ -8,7 +8,7 @@
 //      projection of its map point under a constant-velocity pose prediction, the other tracks
 //      at the mean shift of those guesses. FRONT-END MASKING: a track that lands on the dilated
 //      hand mask is dropped, and no corner is ever detected there (corners.hpp).
-//      TURN MODE: while the rotation exceeds turnRateDeg a frame (a fast head turn: up to
+//      TURN MODE: while the rotation exceeds turn.rateDeg a frame (a fast head turn: up to
 //      20° ≈ 140 px a frame; looking around and walking stay below 3.5°), every track is also
 //      started at its ray rotated by a constant-angular-velocity prediction (the infinite
 //      homography), the rotation coming from the map or, without a map pose, from the rays.
@@ -33,9 +33,9 @@
 //      from the keyframe's image (a point covered by a hand, or out of view in a turn, comes
 //      back as the same map point instead of a new unmapped corner). Then the pose by P3P-RANSAC + robust LM on the
 //      tracks' map points (pnp_ransac.hpp);
-//      in turn mode a pose from as few as minTurnInliers points is accepted when its rotation
+//      in turn mode a pose from as few as turn.minInliers points is accepted when its rotation
 //      agrees with the rays' (the map leaves the view faster than new points are made); when
-//      even that fails right after two posed frames, the TURN BRIDGE (turn_bridge.hpp, turnBridge)
+//      even that fails right after two posed frames, the TURN BRIDGE (turn_bridge.hpp, turn.bridge)
 //      poses the frame from the last one: the step's direction from a head sphere (Δc ∝ Δz),
 //      the rotation from the tracks' epipolar geometry, the length from the map points still
 //      tracked and the tracks triangulated from the two posed frames; the frame becomes a
@@ -173,6 +173,39 @@ struct SlamInitOptions {
   }
 };
 
+/// Fast head turns (turn mode; mono_slam/front_end.hpp, tracking.hpp).
+template <typename Scalar>
+struct SlamTurnOptions {
+  Scalar rateDeg = Scalar(5);         ///< rotation a frame that starts turn mode (walking: < 3.5)
+  int holdFrames = 5;                 ///< frames it lasts after the last such increment
+  int minInliers = 10;                ///< PnP inliers enough when the rays agree
+  Scalar rotationAgreementDeg = Scalar(1);  ///< PnP vs tracked-ray rotation, for that
+  /// Turn bridge (turn_bridge.hpp): in turn mode, a frame whose PnP fails right after two posed
+  /// frames is posed from the last one and the tracks between them (the step's direction from a
+  /// head sphere, the rotation from the tracks' epipolar geometry, the length from the map points
+  /// still tracked and the tracks triangulated from the two posed frames), at most
+  /// maxBridgeFrames in a row; it becomes a keyframe, so the tracks born in the turn are
+  /// triangulated and the map goes on instead of being reset.
+  bool bridge = true;
+  int maxBridgeFrames = 12;
+  Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
+  /// A frame whose tracked rays give no rotation turns on at the last step's angular velocity
+  /// (coastRotation), for at most coastFrames frames in a row, from a step of at most
+  /// coastMaxStepDeg (a head peaks near 600°/s, 20° a frame at 30 fps); 0: held instead.
+  int coastFrames = 6;
+  Scalar coastMaxStepDeg = Scalar(20);
+
+  /// Throws hawor::Error naming the first bad field.
+  void validate() const {
+    if (!(rateDeg > Scalar(0))) throw Error("turn.rateDeg must be > 0");
+    if (holdFrames < 0 || maxBridgeFrames < 0 || coastFrames < 0) throw Error("turn.holdFrames, turn.maxBridgeFrames and turn.coastFrames must be >= 0");
+    if (minInliers < 6) throw Error("turn.minInliers must be >= 6");
+    if (!(rotationAgreementDeg >= Scalar(0)) || !(bridgeMinParallaxDeg >= Scalar(0)) || !(coastMaxStepDeg >= Scalar(0))) {
+      throw Error("turn.rotationAgreementDeg, turn.bridgeMinParallaxDeg and turn.coastMaxStepDeg must be >= 0");
+    }
+  }
+};
+
 template <typename Scalar>
 struct SlamOptions {
   int pyramidLevels = 4;
@@ -196,27 +229,9 @@ struct SlamOptions {
   // Tracking.
   PnPRansacOptions<Scalar> pnp;
   int minInliers = 25;
-  // Turn mode (fast head turns).
-  Scalar turnRateDeg = Scalar(5);     ///< rotation a frame that starts turn mode (walking: < 3.5)
-  int turnHoldFrames = 5;             ///< frames it lasts after the last such increment
-  int minTurnInliers = 10;                       ///< PnP inliers enough when the rays agree (turns)
-  Scalar turnRotationAgreementDeg = Scalar(1);   ///< PnP vs tracked-ray rotation, for that
-  /// Turn bridge (turn_bridge.hpp): in turn mode, a frame whose PnP fails right after two posed
-  /// frames is posed from the last one and the tracks between them (the step's direction from a
-  /// head sphere, the rotation from the tracks' epipolar geometry, the length from the map points
-  /// still tracked and the tracks triangulated from the two posed frames), at most
-  /// maxBridgeFrames in a row; it becomes a keyframe, so the tracks born in the turn are
-  /// triangulated and the map goes on instead of being reset.
-  bool turnBridge = true;
-  int maxBridgeFrames = 12;
-  Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
+  SlamTurnOptions<Scalar> turn;     ///< fast head turns: turn mode, its tracking, the bridge, coasting
   TurnBridgeOptions<Scalar> bridge;
   int lostFramesBeforeReset = 4;
-  /// In turn mode, a frame whose tracked rays give no rotation turns on at the last step's
-  /// angular velocity (coastRotation), for at most coastFrames frames in a row, from a step of at
-  /// most coastMaxStepDeg (a head peaks near 600°/s, 20° a frame at 30 fps); 0: held instead.
-  int coastFrames = 6;
-  Scalar coastMaxStepDeg = Scalar(20);
   /// Before a map, tracks more than this far off the frame's rotation from the rays are dropped
   /// (dropJumpedTracks); 0: off. Measured on fast_turns seeds 1-8 (bench_slam, masked /
   /// unmasked ATE sums, 300 frames and the first 100): 5° 21.3 / 19.0 and 39.9 / 29.2, 6° 22.7 /
@@ -393,11 +408,12 @@ class MonoSlam {
     }
     if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
         opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
-        opt_.maskBlock < 1 || opt_.coastFrames < 0 || !(opt_.coastMaxStepDeg >= Scalar(0)) ||
+        opt_.maskBlock < 1 ||
         !(std::abs(opt_.rollingShutter) <= Scalar(1))) {
       throw Error("MonoSlam: invalid options");
     }
     opt_.init.validate();
+    opt_.turn.validate();
     opt_.keyframe.validate();
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
     // every focal refinement's prior stays on the focal given here (or focal.priorFx)

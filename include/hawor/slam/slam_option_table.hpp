@@ -1,7 +1,7 @@
 // hawor/slam/slam_option_table.hpp — SlamOptions by name: `setSlamOption(options, "initMinTracks",
 // "40")`, for tools that try a setting without a rebuild (`hawor slam --set NAME=VALUE,...`, the
 // SLAM benchmarks' ablations). The numeric and boolean fields of SlamOptions and of its
-// parts' option structs (init., keyframe., corners., klt., twoView., pnp., bridge.,
+// parts' option structs (init., turn., keyframe., corners., klt., twoView., pnp., bridge.,
 // sequence., headModel., focal. NAME); values are checked (an integer for an int, a finite number,
 // true/false/1/0 for a bool) and an unknown name is an error that lists the known ones.
 #pragma once
@@ -31,11 +31,7 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"maskDilatePx", [](O& o) -> T& { return o.maskDilatePx; }},
       {"maskBlock", [](O& o) -> T& { return o.maskBlock; }},
       {"minInliers", [](O& o) -> T& { return o.minInliers; }},
-      {"turnHoldFrames", [](O& o) -> T& { return o.turnHoldFrames; }},
-      {"minTurnInliers", [](O& o) -> T& { return o.minTurnInliers; }},
-      {"maxBridgeFrames", [](O& o) -> T& { return o.maxBridgeFrames; }},
       {"lostFramesBeforeReset", [](O& o) -> T& { return o.lostFramesBeforeReset; }},
-      {"coastFrames", [](O& o) -> T& { return o.coastFrames; }},
       {"refindKeyframes", [](O& o) -> T& { return o.refindKeyframes; }},
       {"refindBelow", [](O& o) -> T& { return o.refindBelow; }},
       {"refindMaxPoints", [](O& o) -> T& { return o.refindMaxPoints; }},
@@ -61,6 +57,10 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"init.minTracks", [](O& o) -> T& { return o.init.minTracks; }},
       {"init.reinitMinTracks", [](O& o) -> T& { return o.init.reinitMinTracks; }},
       {"init.maxGap", [](O& o) -> T& { return o.init.maxGap; }},
+      {"turn.holdFrames", [](O& o) -> T& { return o.turn.holdFrames; }},
+      {"turn.minInliers", [](O& o) -> T& { return o.turn.minInliers; }},
+      {"turn.maxBridgeFrames", [](O& o) -> T& { return o.turn.maxBridgeFrames; }},
+      {"turn.coastFrames", [](O& o) -> T& { return o.turn.coastFrames; }},
       {"keyframe.minInliers", [](O& o) -> T& { return o.keyframe.minInliers; }},
       {"keyframe.maxInterval", [](O& o) -> T& { return o.keyframe.maxInterval; }},
       {"keyframe.minInterval", [](O& o) -> T& { return o.keyframe.minInterval; }},
@@ -104,10 +104,6 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
   using T = Scalar;
   static const std::vector<Field<O, T>> f = {
       {"rollingShutter", [](O& o) -> T& { return o.rollingShutter; }},
-      {"turnRateDeg", [](O& o) -> T& { return o.turnRateDeg; }},
-      {"turnRotationAgreementDeg", [](O& o) -> T& { return o.turnRotationAgreementDeg; }},
-      {"bridgeMinParallaxDeg", [](O& o) -> T& { return o.bridgeMinParallaxDeg; }},
-      {"coastMaxStepDeg", [](O& o) -> T& { return o.coastMaxStepDeg; }},
       {"maxRayJumpDeg", [](O& o) -> T& { return o.maxRayJumpDeg; }},
       {"refindMaxShiftPx", [](O& o) -> T& { return o.refindMaxShiftPx; }},
       {"revisitMaxAngleDeg", [](O& o) -> T& { return o.revisitMaxAngleDeg; }},
@@ -125,6 +121,10 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
       {"focalMinStd", [](O& o) -> T& { return o.focalMinStd; }},
       {"init.minFlowPx", [](O& o) -> T& { return o.init.minFlowPx; }},
       {"init.minRotationDeg", [](O& o) -> T& { return o.init.minRotationDeg; }},
+      {"turn.rateDeg", [](O& o) -> T& { return o.turn.rateDeg; }},
+      {"turn.rotationAgreementDeg", [](O& o) -> T& { return o.turn.rotationAgreementDeg; }},
+      {"turn.bridgeMinParallaxDeg", [](O& o) -> T& { return o.turn.bridgeMinParallaxDeg; }},
+      {"turn.coastMaxStepDeg", [](O& o) -> T& { return o.turn.coastMaxStepDeg; }},
       {"keyframe.inlierRatio", [](O& o) -> T& { return o.keyframe.inlierRatio; }},
       {"keyframe.maxRotationDeg", [](O& o) -> T& { return o.keyframe.maxRotationDeg; }},
       {"twoView.focalPx", [](O& o) -> T& { return o.twoView.focalPx; }},
@@ -192,7 +192,6 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
   using T = bool;
   static const std::vector<Field<O, T>> f = {
       {"useMasks", [](O& o) -> T& { return o.useMasks; }},
-      {"turnBridge", [](O& o) -> T& { return o.turnBridge; }},
       {"headModelJoin", [](O& o) -> T& { return o.headModelJoin; }},
       {"headModelJoinAll", [](O& o) -> T& { return o.headModelJoinAll; }},
       {"headModelJoinBeforeRefine", [](O& o) -> T& { return o.headModelJoinBeforeRefine; }},
@@ -206,6 +205,7 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
       {"headModelFill", [](O& o) -> T& { return o.headModelFill; }},
       {"refineFocal", [](O& o) -> T& { return o.refineFocal; }},
       {"init.thirdView", [](O& o) -> T& { return o.init.thirdView; }},
+      {"turn.bridge", [](O& o) -> T& { return o.turn.bridge; }},
       {"klt.forwardBackward", [](O& o) -> T& { return o.klt.forwardBackward; }},
       {"twoView.essentialOverPlane", [](O& o) -> T& { return o.twoView.essentialOverPlane; }},
       {"twoView.refine", [](O& o) -> T& { return o.twoView.refine; }},

@@ -65,10 +65,10 @@ void MonoSlam<Scalar>::trackFeatures(int f) {
   // Translation: constant velocity when both frames have a map pose, else held.
   const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
   const bool rot2 = f >= 2 && frames_[static_cast<std::size_t>(f - 2)].rotationKnown && p1.rotationKnown;
-  // Turn mode: the last rotation increment is at least turnRateDeg a frame (a fast head
-  // turn; slow looking around stays far below), held for turnHoldFrames after (deceleration).
-  if (rot2 && rotationAngleDeg(frames_[static_cast<std::size_t>(f - 2)].T, p1.T) >= opt_.turnRateDeg) {
-    turnUntil_ = f + opt_.turnHoldFrames;
+  // Turn mode: the last rotation increment is at least turn.rateDeg a frame (a fast head
+  // turn; slow looking around stays far below), held for turn.holdFrames after (deceleration).
+  if (rot2 && rotationAngleDeg(frames_[static_cast<std::size_t>(f - 2)].T, p1.T) >= opt_.turn.rateDeg) {
+    turnUntil_ = f + opt_.turn.holdFrames;
   }
   turning_ = f <= turnUntil_;
   havePrediction_ = state_ == State::Tracking && f >= 2 && frames_[static_cast<std::size_t>(f - 2)].posed && p1.posed;
@@ -216,23 +216,23 @@ auto MonoSlam<Scalar>::rotationCarriedOn(int f) const -> SE3T {
   return SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R1 * (R2.transpose() * R1))), T1.translation());
 }
 
-/// SlamOptions::coastFrames: frame f's rotation when the tracked rays give none, in turn mode:
+/// SlamOptions::turn.coastFrames: frame f's rotation when the tracked rays give none, in turn mode:
 /// the last step carried on, R_f = R_{f−1}·(R_{f−2}ᵀ·R_{f−1}) (constant angular velocity),
-/// position held; at most coastFrames frames in a row and only from a step of at most
-/// coastMaxStepDeg. A head turning onto a bare wall keeps turning while no track survives;
+/// position held; at most turn.coastFrames frames in a row and only from a step of at most
+/// turn.coastMaxStepDeg. A head turning onto a bare wall keeps turning while no track survives;
 /// holding the rotation instead loses the whole turn (fast_turns seed 8: 66° over frames 88–91)
 /// and every later frame, posed or not, keeps that offset.
 template <typename Scalar>
 bool MonoSlam<Scalar>::coastRotation(int f) {
   Frame& fr = frames_.back();
-  if (opt_.coastFrames <= 0 || !turning_ || f < 2) return false;
+  if (opt_.turn.coastFrames <= 0 || !turning_ || f < 2) return false;
   const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
   const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
   if (!p1.rotationKnown || !p2.rotationKnown) return false;
   int run = 0;
   while (run < f && frames_[static_cast<std::size_t>(f - 1 - run)].coasted) ++run;
-  if (run >= opt_.coastFrames) return false;
-  if (rotationAngleDeg(p2.T, p1.T) > opt_.coastMaxStepDeg) return false;
+  if (run >= opt_.turn.coastFrames) return false;
+  if (rotationAngleDeg(p2.T, p1.T) > opt_.turn.coastMaxStepDeg) return false;
   fr.T = rotationCarriedOn(f);
   fr.rotationKnown = true;
   fr.coasted = true;

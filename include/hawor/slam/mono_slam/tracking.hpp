@@ -55,10 +55,10 @@ void MonoSlam<Scalar>::trackPose(int f) {
   mappedTracks(X, uv, ti);
   bool ok = false;
   // Rotation-checked tracking: while a head turn sweeps the map out of view, fewer than
-  // minInliers map points may remain. A pose from as few as minTurnInliers is accepted when
+  // minInliers map points may remain. A pose from as few as turn.minInliers is accepted when
   // its rotation agrees with the one of all tracked rays (hundreds of tracks, mapped or not;
   // near-exact for a rotation-dominant motion) and most of the points are inliers.
-  const int needed = std::min(opt_.minInliers, opt_.minTurnInliers);
+  const int needed = std::min(opt_.minInliers, opt_.turn.minInliers);
   Mat3<Scalar> dRays;
   const bool haveRays = turning_ && static_cast<int>(X.size()) < 2 * opt_.minInliers && rayRotation(dRays);
   if (static_cast<int>(X.size()) >= (haveRays ? needed : opt_.minInliers)) {
@@ -70,7 +70,7 @@ void MonoSlam<Scalar>::trackPose(int f) {
     if (accept && r.numInliers < opt_.minInliers) {
       const SE3T& prev = frames_[static_cast<std::size_t>(f - 1)].T;
       const SE3T byRays(SO3<Scalar>::fromMatrix(Mat3<Scalar>(prev.rotationMatrix() * dRays)), prev.translation());
-      accept = rotationAngleDeg(byRays, r.T_w_c) < opt_.turnRotationAgreementDeg &&
+      accept = rotationAngleDeg(byRays, r.T_w_c) < opt_.turn.rotationAgreementDeg &&
                Scalar(r.numInliers) >= Scalar(0.8) * Scalar(X.size());
     }
     if (accept) {
@@ -86,8 +86,8 @@ void MonoSlam<Scalar>::trackPose(int f) {
   }
   if (ok) {
     bridged_ = 0;
-  } else if (opt_.turnBridge && turning_ && f >= 2 && frames_[static_cast<std::size_t>(f - 1)].posed &&
-             frames_[static_cast<std::size_t>(f - 2)].posed && bridged_ < opt_.maxBridgeFrames) {
+  } else if (opt_.turn.bridge && turning_ && f >= 2 && frames_[static_cast<std::size_t>(f - 1)].posed &&
+             frames_[static_cast<std::size_t>(f - 2)].posed && bridged_ < opt_.turn.maxBridgeFrames) {
     ok = bridgeTurn(f);
     bridged_ = ok ? bridged_ + 1 : 0;
   }
@@ -144,7 +144,7 @@ void MonoSlam<Scalar>::trackPose(int f) {
   }
 }
 
-/// SlamOptions::turnBridge (turn_bridge.hpp): the pose of frame f from frame f − 1 and the
+/// SlamOptions::turn.bridge (turn_bridge.hpp): the pose of frame f from frame f − 1 and the
 /// tracks between them. The length's points: the map points still tracked and every other
 /// track seen in frames f − 2 and f − 1 (both posed), triangulated from those two.
 template <typename Scalar>
@@ -153,7 +153,7 @@ bool MonoSlam<Scalar>::bridgeTurn(int f) {
   const Frame& p1 = frames_[static_cast<std::size_t>(f - 1)];
   const Frame& p2 = frames_[static_cast<std::size_t>(f - 2)];
   const SE3T T1cw = p1.T.inverse(), T2cw = p2.T.inverse();
-  const Scalar cosMin = std::cos(opt_.bridgeMinParallaxDeg * Constants<Scalar>::pi() / Scalar(180));
+  const Scalar cosMin = std::cos(opt_.turn.bridgeMinParallaxDeg * Constants<Scalar>::pi() / Scalar(180));
   std::vector<V2> x1, x2, y;
   std::vector<V3> X;
   x1.reserve(tracks_.size()), x2.reserve(tracks_.size());
