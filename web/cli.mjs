@@ -69,9 +69,9 @@ export function parseArgs(argv) {
     else if (a === '--camera') { o.camera = next(); if (!o.camera.trim()) throw usage('--camera needs a lens (pinhole, opencv:k1,k2,p1,p2[,k3] or fisheye:k1,k2,k3,k4)'); }
     else if (a === '--no-refine-focal') o.refineFocal = false;
     else if (a === '--readout') {
-      o.readout = Number(argv[i + 1]);
-      next();
-      if (!Number.isFinite(o.readout) || Math.abs(o.readout) > 0.1) throw usage(`--readout is the rolling shutter's readout in seconds (a phone: 0.015-0.03; negative for a clip played backwards), at most one frame interval, not '${argv[i]}'`);
+      const v = next();
+      o.readout = v.trim() === '' ? NaN : Number(v);
+      if (!Number.isFinite(o.readout) || Math.abs(o.readout) > 0.1) throw usage(`--readout is the rolling shutter's readout in seconds (a phone: 0.015-0.03; negative for a clip played backwards), at most one frame interval, not '${v}'`);
     }
     else if (a === '--mano') o.mano = next();
     else if (a === '--depth-model') o.depthModel = next();

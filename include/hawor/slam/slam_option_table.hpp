@@ -21,6 +21,15 @@ namespace slam_option_detail {
 template <typename O, typename T>
 using Field = std::pair<const char*, T& (*)(O&)>;
 
+/// The accessor of the field called `name` among `fields`, or null.
+template <typename O, typename T>
+auto find(const std::vector<Field<O, T>>& fields, const std::string& name) -> T& (*)(O&) {
+  for (const auto& f : fields) {
+    if (name == f.first) return f.second;
+  }
+  return nullptr;
+}
+
 template <typename Scalar>
 const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
   using O = SlamOptions<Scalar>;
@@ -232,33 +241,30 @@ std::vector<std::string> slamOptionNames() {
 /// Sets one field from its text; throws hawor::Error naming the field and the problem.
 template <typename Scalar>
 void setSlamOption(SlamOptions<Scalar>& o, const std::string& name, const std::string& value) {
+  namespace d = slam_option_detail;
   const std::string what = "SLAM option " + name + "=" + value + ": ";
-  for (const auto& f : slam_option_detail::boolFields<Scalar>()) {
-    if (name != f.first) continue;
-    if (value == "true" || value == "1") f.second(o) = true;
-    else if (value == "false" || value == "0") f.second(o) = false;
+  if (const auto field = d::find(d::boolFields<Scalar>(), name)) {
+    if (value == "true" || value == "1") field(o) = true;
+    else if (value == "false" || value == "0") field(o) = false;
     else throw Error(what + "expects true, false, 1 or 0");
     return;
   }
   char* end = nullptr;
   const double x = std::strtod(value.c_str(), &end);
   const bool number = !value.empty() && end && *end == '\0' && std::isfinite(x);
-  for (const auto& f : slam_option_detail::intFields<Scalar>()) {
-    if (name != f.first) continue;
+  if (const auto field = d::find(d::intFields<Scalar>(), name)) {
     if (!number || x != std::floor(x) || std::abs(x) > 1e9) throw Error(what + "expects an integer");
-    f.second(o) = static_cast<int>(x);
+    field(o) = static_cast<int>(x);
     return;
   }
-  for (const auto& f : slam_option_detail::scalarFields<Scalar>()) {
-    if (name != f.first) continue;
+  if (const auto field = d::find(d::scalarFields<Scalar>(), name)) {
     if (!number) throw Error(what + "expects a finite number");
-    f.second(o) = static_cast<Scalar>(x);
+    field(o) = static_cast<Scalar>(x);
     return;
   }
-  for (const auto& f : slam_option_detail::floatFields<Scalar>()) {
-    if (name != f.first) continue;
+  if (const auto field = d::find(d::floatFields<Scalar>(), name)) {
     if (!number) throw Error(what + "expects a finite number");
-    f.second(o) = static_cast<float>(x);
+    field(o) = static_cast<float>(x);
     return;
   }
   std::string known;
