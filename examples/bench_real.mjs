@@ -357,7 +357,10 @@ export function scoreHands(res, v, labels, n0, origRes) {
 const fmtTum = (t, C, q) => `${t.toFixed(6)} ${C.map((x) => x.toPrecision(12)).join(' ')} ${q[1].toPrecision(12)} ${q[2].toPrecision(12)} ${q[3].toPrecision(12)} ${q[0].toPrecision(12)}\n`;
 
 /** Camera against each segment: writes the matched TUM files, runs `hawor metrics camera`. */
-export function scoreCamera(res, v, segs, n0, dir, hawor) {
+export function scoreCamera(res, v, segs, n0, dir, hawor, order = null) {
+  // order (optional): the recorded frame each output frame shows (a clip played in passes shows
+  // every frame several times); every showing is scored against the same reference pose, with
+  // one Sim(3) over all of them, at the output frame's time.
   const T = res.frameCount;
   const pos = res.camera.positions;
   const quat = res.camera.quaternions; // x y z w
@@ -365,7 +368,9 @@ export function scoreCamera(res, v, segs, n0, dir, hawor) {
   for (let i = 0; i < T; ++i) {
     const C = [pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]];
     const q = [quat[4 * i + 3], quat[4 * i], quat[4 * i + 1], quat[4 * i + 2]];
-    byOrig.set(origFrame(v, i, n0), { C, q, status: res.camera.status[i] });
+    const k = origFrame(v, order ? order[i] : i, n0);
+    if (!byOrig.has(k)) byOrig.set(k, []);
+    byOrig.get(k).push({ i, C, q, status: res.camera.status[i] });
   }
   const M = [[-1, 0, 0], [0, 1, 0], [0, 0, 1]];
   const out = {};
@@ -374,9 +379,10 @@ export function scoreCamera(res, v, segs, n0, dir, hawor) {
     let est = '';
     const status = [0, 0, 0, 0];
     let n = 0;
-    for (const p of seg.poses) {
-      const e = byOrig.get(p.frame);
-      if (!e) continue;
+    const rows = [];
+    for (const p of seg.poses) for (const e of byOrig.get(p.frame) ?? []) rows.push({ p, e });
+    if (order) rows.sort((a, b) => a.e.i - b.e.i);
+    for (const { p, e } of rows) {
       let C = p.C;
       let q = p.q;
       if (v.mirror) {
@@ -385,7 +391,7 @@ export function scoreCamera(res, v, segs, n0, dir, hawor) {
         C = [-C[0], C[1], C[2]];
         q = rotToQuat(R2);
       }
-      const t = p.frame / 30;
+      const t = (order ? e.i : p.frame) / 30;
       gt += fmtTum(t, C, q);
       est += fmtTum(t, e.C, e.q);
       status[e.status] += 1;
@@ -402,7 +408,7 @@ export function scoreCamera(res, v, segs, n0, dir, hawor) {
     // reference positions' mean distance to their centroid.
     const E = est.trim().split('\n').map((l) => l.split(' ').slice(1, 4).map(Number));
     if (E.every((p) => p[0] === E[0][0] && p[1] === E[0][1] && p[2] === E[0][2])) {
-      const G = seg.poses.filter((p) => byOrig.has(p.frame)).map((p) => p.C);
+      const G = rows.map(({ p }) => p.C);
       const mean = [0, 1, 2].map((a) => G.reduce((t, p) => t + p[a], 0) / G.length);
       const ate = G.reduce((t, p) => t + Math.hypot(p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]), 0) / G.length;
       out[seg.name] = { ...base, held: true, ate, atePct: (100 * ate) / seg.path, rot_mean_deg: null, note: 'the estimate is one held pose on this segment (scale-0 fit)' };

@@ -9,13 +9,21 @@
 //
 //   node examples/bench_real_slam.mjs [--work DIR] [--inputs DIR] [--variants a,b] [--hawor BIN]
 //        [--core hawor_core.mjs] [--jobs N] [--json OUT] [--record-only] [--rerecord]
-//        [--playback forward|reverse|both] [-- extra hawor slam flags]
+//        [--playback forward|reverse|both] [--passes N] [-- extra hawor slam flags]
 //
 // --playback    reverse: each variant's recorded inputs in reverse order (the clip played
 //               backwards; a `--readout S` among the extra flags is negated, the rows being read
 //               bottom to top in that clip's time), the trajectory scored back in forward order;
 //               both: forward and reverse rows. The SLAM should not care which way the clip runs
 //               (a different sequence of the same frames: twice the evidence for a change).
+//
+// --passes N    each variant played as one clip of N passes, forward and backward in turn (the
+//               frame at a turning point not repeated): the wearer going back and forth over the
+//               same places, N x 4 s. Every showing of a frame is scored against the same COLMAP
+//               pose with one Sim(3) per segment over all passes (ATE in % of one pass's path), and
+//               'scale x' is the largest over the smallest of the passes' path lengths in a
+//               segment (1: every pass at one scale). Native runs only; no --readout (the rows'
+//               order flips at each turning point).
 //
 // --work DIR    bench_real's work folder (default $TMPDIR/hawor_bench_real): its variants/ and
 //               colmap/reference.json are used (run bench_real.mjs --make-only once, and COLMAP
@@ -163,6 +171,62 @@ function reversedInputs(dir, meta) {
   return rdir;
 }
 
+/** The recorded frame shown at each frame of a clip of `passes` passes over n frames, forward and
+ *  backward in turn (a turning point's frame shown once), and the pass of each. */
+export function passOrder(n, passes) {
+  const order = [];
+  const pass = [];
+  for (let p = 0; p < passes; ++p) {
+    for (let j = p === 0 ? 0 : 1; j < n; ++j) {
+      order.push(p % 2 === 0 ? j : n - 1 - j);
+      pass.push(p);
+    }
+  }
+  return { order, pass };
+}
+
+/** The recorded inputs as a clip of `passes` passes (passOrder), as links in DIR/passes_N/. */
+function passesInputs(dir, meta, passes) {
+  const pdir = join(dir, `passes_${passes}`);
+  if (existsSync(join(pdir, 'done'))) return pdir;
+  rmSync(pdir, { recursive: true, force: true });
+  const { order } = passOrder(meta.frames, passes);
+  for (const sub of ['frames', 'masks']) {
+    mkdirSync(join(pdir, sub), { recursive: true });
+    order.forEach((r, i) => {
+      const src = join(dir, sub, `${String(r).padStart(6, '0')}.png`);
+      if (existsSync(src)) symlinkSync(resolve(src), join(pdir, sub, `${String(i).padStart(6, '0')}.png`));
+    });
+  }
+  writeFileSync(join(pdir, 'done'), '');
+  return pdir;
+}
+
+/** Per segment: the largest over the smallest of the passes' estimated path lengths over the
+ *  segment's frames (passes with at least 10 of them). */
+function passScaleSpread(positions, order, pass, v, segs, n0) {
+  const out = {};
+  for (const seg of segs) {
+    const inSeg = new Set(seg.poses.map((p) => p.frame));
+    const len = new Map();
+    const cnt = new Map();
+    let prev = -1;
+    for (let i = 0; i < order.length; ++i) {
+      if (!inSeg.has(origFrame(v, order[i], n0))) { prev = -1; continue; }
+      const p = pass[i];
+      cnt.set(p, (cnt.get(p) ?? 0) + 1);
+      if (prev >= 0 && pass[prev] === p) {
+        const d = Math.hypot(positions[3 * i] - positions[3 * prev], positions[3 * i + 1] - positions[3 * prev + 1], positions[3 * i + 2] - positions[3 * prev + 2]);
+        len.set(p, (len.get(p) ?? 0) + d);
+      }
+      prev = i;
+    }
+    const L = [...cnt.keys()].filter((p) => cnt.get(p) >= 10).map((p) => len.get(p) ?? 0);
+    out[seg.name] = L.length >= 2 ? Math.max(...L) / Math.max(Math.min(...L), 1e-12) : null;
+  }
+  return out;
+}
+
 /** The extra flags for a reversed run: --readout negated. */
 function reversedFlags(extra) {
   return extra.map((a, i) => (i > 0 && extra[i - 1] === '--readout' ? String(-Number(a)) : a.startsWith('--readout=') ? `--readout=${-Number(a.slice(10))}` : a));
@@ -178,10 +242,10 @@ function unreverseOutputs(out, fps) {
   writeFileSync(join(out, 'stats.json'), JSON.stringify(stats));
 }
 
-function runSlam(o, dir, meta, extra, reversed = false) {
+function runSlam(o, dir, meta, extra, reversed = false, passes = 0) {
   return new Promise((res) => {
-    const out = join(dir, reversed ? 'out_reversed' : 'out');
-    const src = reversed ? reversedInputs(dir, meta) : dir;
+    const out = join(dir, passes ? `out_passes_${passes}` : reversed ? 'out_reversed' : 'out');
+    const src = passes ? passesInputs(dir, meta, passes) : reversed ? reversedInputs(dir, meta) : dir;
     rmSync(out, { recursive: true, force: true });
     mkdirSync(out, { recursive: true });
     const args = ['slam', '--images', join(src, 'frames'), '--masks', join(src, 'masks'), '--intrinsics', meta.intrinsics.join(','),
@@ -258,9 +322,12 @@ function parse(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--record-only') o.recordOnly = true;
     else if (a === '--rerecord') o.rerecord = true;
+    else if (a === '--passes') { o.passes = Number(v()); if (!Number.isInteger(o.passes) || o.passes < 2 || o.passes > 100) throw new Error(`--passes must be an integer from 2 to 100, not '${argv[i]}'`); }
     else if (a === '--playback') { o.playback = v(); if (!['forward', 'reverse', 'both'].includes(o.playback)) throw new Error(`--playback must be forward, reverse or both, not '${o.playback}'`); }
     else throw new Error(`unknown argument '${a}'`);
   }
+  if (o.passes && o.core) throw new Error('--passes runs the native hawor only (not --core)');
+  if (o.passes && o.extra.some((a) => a.startsWith('--readout'))) throw new Error('--passes cannot take --readout: the rows\' order flips at every turning point');
   for (const n of o.variants) if (!VARIANTS[n]) throw new Error(`unknown variant '${n}' (known: ${Object.keys(VARIANTS).join(', ')})`);
   return o;
 }
@@ -286,15 +353,15 @@ async function main(argv) {
   }
   if (o.recordOnly) return 0;
   if (!existsSync(o.hawor)) throw new Error(`${o.hawor}: missing (cmake --build DIR --target hawor_cli)`);
-  const dirs = { forward: [false], reverse: [true], both: [false, true] }[o.playback];
+  const dirs = o.passes ? [false] : { forward: [false], reverse: [true], both: [false, true] }[o.playback];
   const jobs = o.variants.flatMap((n) => dirs.map((reversed) => ({ n, reversed })));
   const rows = await pool(jobs, o.jobs, async ({ n, reversed }) => {
     const v = VARIANTS[n];
     const dir = join(o.inputs, n);
-    const out = join(dir, reversed ? 'out_reversed' : 'out');
-    const name = reversed ? `${n} (rev)` : n;
+    const out = join(dir, o.passes ? `out_passes_${o.passes}` : reversed ? 'out_reversed' : 'out');
+    const name = o.passes ? `${n} (x${o.passes})` : reversed ? `${n} (rev)` : n;
     const meta = JSON.parse(readFileSync(join(dir, 'slam.json'), 'utf8'));
-    const run = o.core ? await runSlamWasm(o, dir, meta, reversed) : await runSlam(o, dir, meta, o.extra, reversed);
+    const run = o.core ? await runSlamWasm(o, dir, meta, reversed) : await runSlam(o, dir, meta, o.extra, reversed, o.passes ?? 0);
     if (run.code !== 0) return { name, reversed, error: `exit ${run.code}: ${run.stderrTail}` };
     const stats = JSON.parse(readFileSync(join(out, 'stats.json'), 'utf8'));
     const tum = readTum(readFileSync(join(out, 'camera.tum'), 'utf8'));
@@ -304,20 +371,25 @@ async function main(argv) {
     tum.forEach((r, i) => { positions.set(r.slice(1, 4), 3 * i); quaternions.set(r.slice(4, 8), 4 * i); });
     const st = stats.per_frame ? stats.per_frame.map((f) => STATUS[f.status] ?? 1) : (stats.status ?? []).map((s) => STATUS[s] ?? 1);
     const res = { frameCount: T, camera: { positions, quaternions, status: st } };
-    const camera = scoreCamera(res, v, segs, n0, out, o.hawor);
+    const passes = o.passes ? passOrder(meta.frames, o.passes) : null;
+    const camera = scoreCamera(res, v, segs, n0, out, o.hawor, passes?.order);
+    if (passes) {
+      const spread = passScaleSpread(positions, passes.order, passes.pass, v, segs, n0);
+      for (const s of segs) if (camera[s.name]) camera[s.name].scaleSpread = spread[s.name];
+    }
     // the run's first tracked frame (for a reversed run: the last in forward order)
     const tracked = st.map((s, i) => (s === 0 || s === 3 ? i : -1)).filter((i) => i >= 0);
     const firstTracked = tracked.length ? (reversed ? tracked[tracked.length - 1] : tracked[0]) : -1;
-    return { name, reversed, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
+    return { name, reversed, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, passes ? passes.order[firstTracked] : firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
       interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
   });
   const names = segs.map((s) => s.name);
-  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), 'init', 'lost', 'interp', 'resets', 'ms/frame'];
+  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), ...(o.passes ? names.map((s) => `scale x ${s}`) : []), 'init', 'lost', 'interp', 'resets', 'ms/frame'];
   const lines = [head];
   for (const r of rows) {
     if (r.error) { lines.push([r.name, `error: ${r.error}`]); continue; }
     lines.push([r.name, String(r.frames), ...names.map((s) => (r.camera[s]?.held ? `held ${f2(r.camera[s].atePct, 0)}` : f2(r.camera[s]?.atePct))),
-      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), f2(r.msMedian, 1)]);
+      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), ...(o.passes ? names.map((s) => f2(r.camera[s]?.scaleSpread)) : []), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), f2(r.msMedian, 1)]);
   }
   const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
   process.stdout.write(`${lines.map((l) => l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ')).join('\n')}\n`);
