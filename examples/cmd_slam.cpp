@@ -260,6 +260,8 @@ int cmdSlam(int argc, char** argv) {
       .integer("resets", r.numResets)
       .integer("relocalisations", r.numRelocalisations)
       .integer("revisit_points", r.numRevisitPoints)
+      .integer("place_links", r.numPlaceLinks)
+      .integer("placed_segments", r.numPlacedSegments)
       .integer("refined_frames", r.numRefinedFrames)
       .integer("head_model_frames", r.numHeadModelFrames)
       .raw("initialised", r.initialised ? "true" : "false")

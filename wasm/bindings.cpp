@@ -22,8 +22,8 @@
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
 //       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
 //       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
-//       numResets, numRelocalisations, numRevisitPoints, numRefinedFrames, numHeadModelFrames,
-//       initialised, focal: {attempted, accepted, changed, guessFx,
+//       numResets, numRelocalisations, numRevisitPoints, numPlaceLinks, numPlacedSegments,
+//       numRefinedFrames, numHeadModelFrames, initialised, focal: {attempted, accepted, changed, guessFx,
 //       fx, fy (the output's), estimateFx, stdLog (posterior std of log f), dataStdLog, rmsGuessPx, rmsPx,
 //       evaluations, reason}}
 //   metricScale({rotations, translations, fps?, keyframeDepths?, depthMaps?: [Float32Array],
@@ -398,6 +398,8 @@ class MonoSlam {
       o.set("numResets", r.numResets);
       o.set("numRelocalisations", r.numRelocalisations);
       o.set("numRevisitPoints", r.numRevisitPoints);
+      o.set("numPlaceLinks", r.numPlaceLinks);
+      o.set("numPlacedSegments", r.numPlacedSegments);
       o.set("numRefinedFrames", r.numRefinedFrames);
       o.set("numHeadModelFrames", r.numHeadModelFrames);
       o.set("initialised", r.initialised);

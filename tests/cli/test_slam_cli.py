@@ -62,6 +62,7 @@ def declared_options():
 
     names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
     for prefix, header, struct in (("init", "mono_slam.hpp", "SlamInitOptions"),
+                                   ("place", "mono_slam.hpp", "SlamPlaceOptions"),
                                    ("turn", "mono_slam.hpp", "SlamTurnOptions"),
                                    ("keyframe", "keyframe_policy.hpp", "KeyframePolicyOptions"),
                                    ("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),

@@ -1,7 +1,9 @@
 // Place recognition's parts: the binary descriptors (binary_descriptor.hpp) by their invariances
 // (exact under translation and positive affine intensity changes, near under a 90° rotation of
 // the image) and their distinctiveness; the matching and the place index against brute force
-// written out here; the Sim(3) RANSAC (sim3_ransac.hpp) against a known similarity with outliers.
+// written out here; the Sim(3) RANSAC (sim3_ransac.hpp) against a known similarity with outliers;
+// the Sim(3) pose graph (pose_graph.hpp) against consistent poses and a least-squares answer
+// solved here.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -12,6 +14,7 @@
 
 #include "hawor/slam/binary_descriptor.hpp"
 #include "hawor/slam/place_index.hpp"
+#include "hawor/slam/pose_graph.hpp"
 #include "hawor/slam/sim3_ransac.hpp"
 
 namespace {
@@ -219,4 +222,63 @@ TEMPLATE_TEST_CASE("solveSim3Ransac recovers a known similarity from matches wit
   const std::vector<V2> fu(u1.begin(), u1.begin() + 5), fu2(u2.begin(), u2.begin() + 5);
   CHECK_FALSE(hawor::solveSim3Ransac(few, few2, fu, fu2, cam, o).found);
   CHECK_THROWS_AS(hawor::solveSim3Ransac(P1, few2, u1, u2, cam, o), hawor::Error);
+}
+
+TEMPLATE_TEST_CASE("optimisePoseGraph: a drifted chain with a loop returns to the consistent poses", "[slam][posegraph]", float, double) {
+  using S = TestType;
+  using Sim = hawor::Sim3<S>;
+  using V7 = hawor::Vec7<S>;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> N(0.0, 1.0);
+  auto randomSim = [&](double t, double r, double s) {
+    V7 xi;
+    for (int a = 0; a < 3; ++a) xi(a) = S(t * N(rng));
+    for (int a = 3; a < 6; ++a) xi(a) = S(r * N(rng));
+    xi(6) = S(s * N(rng));
+    return Sim::exp(xi);
+  };
+  std::vector<Sim> truth(12);
+  for (std::size_t i = 1; i < truth.size(); ++i) truth[i] = truth[i - 1] * randomSim(0.5, 0.2, 0.05);
+  std::vector<hawor::PoseGraphEdge<S>> edges;
+  for (int i = 0; i + 1 < 12; ++i) edges.push_back({i, i + 1, Sim(truth[std::size_t(i)].inverse() * truth[std::size_t(i + 1)]), V7::Ones()});
+  edges.push_back({0, 11, Sim(truth[0].inverse() * truth[11]), V7::Ones()});
+  edges.push_back({3, 8, Sim(truth[3].inverse() * truth[8]), V7::Ones()});
+  // drifted start: each node off by a small random similarity (scale too)
+  std::vector<Sim> nodes = truth;
+  for (std::size_t i = 1; i < nodes.size(); ++i) nodes[i] = nodes[i] * randomSim(0.05, 0.03, 0.1);
+  std::vector<char> fixed(12, 0);
+  fixed[0] = 1;
+  const hawor::PoseGraphResult r = hawor::optimisePoseGraph(nodes, edges, fixed);
+  CHECK(r.finalCost < 1e-6 * std::max(r.initialCost, 1e-12) + 1e-8);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    CHECK((nodes[i].inverse() * truth[i]).log().norm() < S(2e-3));
+  }
+}
+
+TEMPLATE_TEST_CASE("optimisePoseGraph: weighted scale edges give the least-squares answer", "[slam][posegraph]", float, double) {
+  using S = TestType;
+  using Sim = hawor::Sim3<S>;
+  using V7 = hawor::Vec7<S>;
+  // identity rotations, zero translations: the residual's σ is σ_j − σ_i − m, the rest 0
+  const double a = std::log(2.0), b = std::log(3.0), c = std::log(4.0);
+  auto scaleEdge = [](int i, int j, double m, double w) {
+    return hawor::PoseGraphEdge<S>{i, j, Sim(S(std::exp(m)), hawor::SO3<S>(), hawor::Vec3<S>::Zero()), V7::Constant(S(w))};
+  };
+  std::vector<hawor::PoseGraphEdge<S>> edges{scaleEdge(0, 1, a, 1), scaleEdge(1, 2, b, 1), scaleEdge(0, 2, c, 4)};
+  std::vector<Sim> nodes(3);
+  const hawor::PoseGraphResult r = hawor::optimisePoseGraph(nodes, edges, std::vector<char>{1, 0, 0});
+  // minimise (x1 − a)² + (x2 − x1 − b)² + 4 (x2 − c)²: [2 −1; −1 5] x = [a − b; b + 4c]
+  const double det = 2 * 5 - 1;
+  const double x1 = (5 * (a - b) + (b + 4 * c)) / det, x2 = ((a - b) + 2 * (b + 4 * c)) / det;
+  CHECK(std::log(double(nodes[1].scale())) == Approx(x1).margin(1e-4));
+  CHECK(std::log(double(nodes[2].scale())) == Approx(x2).margin(1e-4));
+  CHECK(nodes[1].translation().norm() < S(1e-4));
+  CHECK(r.finalCost < r.initialCost);
+  // the gauge and bad input
+  CHECK_THROWS_AS(hawor::optimisePoseGraph(nodes, edges, std::vector<char>{0, 0, 0}), hawor::Error);
+  std::vector<Sim> four(4);
+  CHECK_THROWS_AS(hawor::optimisePoseGraph(four, edges, std::vector<char>{1, 0, 0, 0}), hawor::Error);  // node 3 unconnected
+  auto bad = edges;
+  bad[0].j = 7;
+  CHECK_THROWS_AS(hawor::optimisePoseGraph(nodes, bad, std::vector<char>{1, 0, 0}), hawor::Error);
 }

@@ -53,6 +53,10 @@
 //      Huber loss) and new corners fill the empty cells of the bucketing grid.
 //      BACK-END MASKING: a bundle-adjustment residual whose measured pixel or current projection
 //      lands on the keyframe's hand mask gets weight 0.
+//      PLACE RECOGNITION (place, on; mono_slam/place_links.hpp): the keyframe's map points are
+//      described by binary descriptors in its image and the older keyframes indexed by theirs are
+//      asked for the same place (another segment's, or this one's a while ago); a candidate
+//      verified by a Sim(3) over matched map points is a place link.
 //   5. Tracking loss (too few PnP inliers): RELOCALISATION first (relocalise, on by default):
 //      the map points of a few kept keyframes (relocKeyframes, relocSpacing frames apart) are
 //      projected under the frame's guess (rotation from the tracked rays, position held) and
@@ -74,9 +78,11 @@
 // joined by the head model (head_motion.hpp), a global bundle
 // adjustment over all keyframes and points (per segment: first keyframe fixed, a scale prior on
 // its first baseline), every frame's pose re-estimated against the final map from its stored 2D
-// observations (RANSAC for frames without a tracked pose, robust LM otherwise); then the
+// observations (RANSAC for frames without a tracked pose, robust LM otherwise); each segment with
+// place links to earlier ones moved into their world by the linked points; then the
 // SEQUENCE REFINEMENT (sequence_refine.hpp, sequenceRefine, on): every frame's observations of
-// every track (a track renamed at a reset, and tracks that follow one map point, joined) in one
+// every track (a track renamed at a reset, tracks that follow one map point, and the two points
+// of a place link, joined) in one
 // bundle adjustment, frames with a guessed position resected, ill-conditioned frames left out;
 // frames that still have no pose get their position from the HEAD MODEL fitted to the posed
 // frames around them where it explains them (head_motion.hpp: c = n + M·z, the eye in front of
@@ -97,8 +103,9 @@
 // Not thread-safe; one instance per video.
 // This header holds the options, the result, the class with its state and process(); the member
 // functions are in mono_slam/, one part a header, in the order a frame meets them: front_end,
-// initialisation, tracking, relocalisation (with the revisit and segment-link searches), mapping
-// (keyframes, bundle adjustment), finish (the passes over the whole sequence), segment_joins.
+// initialisation, tracking, relocalisation (with the revisit and segment-link searches),
+// place_links (place recognition, segments placed by it), mapping (keyframes, bundle adjustment),
+// finish (the passes over the whole sequence), segment_joins.
 #pragma once
 
 #include <algorithm>
@@ -115,6 +122,7 @@
 #include "hawor/geometry/interpolate.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/render/image.hpp"
+#include "hawor/slam/binary_descriptor.hpp"
 #include "hawor/slam/bundle_adjustment.hpp"
 #include "hawor/slam/corners.hpp"
 #include "hawor/slam/focal_refine.hpp"
@@ -123,8 +131,10 @@
 #include "hawor/slam/image_pyramid.hpp"
 #include "hawor/slam/keyframe_policy.hpp"
 #include "hawor/slam/klt.hpp"
+#include "hawor/slam/place_index.hpp"
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/sequence_refine.hpp"
+#include "hawor/slam/sim3_ransac.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_bridge.hpp"
 #include "hawor/slam/two_view.hpp"
@@ -203,6 +213,30 @@ struct SlamTurnOptions {
     if (!(rotationAgreementDeg >= Scalar(0)) || !(bridgeMinParallaxDeg >= Scalar(0)) || !(coastMaxStepDeg >= Scalar(0))) {
       throw Error("turn.rotationAgreementDeg, turn.bridgeMinParallaxDeg and turn.coastMaxStepDeg must be >= 0");
     }
+  }
+};
+
+/// Place recognition between keyframes and the joins it makes (mono_slam/place_links.hpp).
+template <typename Scalar>
+struct SlamPlaceOptions {
+  bool enabled = true;
+  int minVotes = 12;                ///< index votes of a candidate (place_index.hpp)
+  int candidates = 3;               ///< best candidates verified per keyframe
+  int minFramesApart = 30;          ///< a candidate in the keyframe's own segment is this much older
+  int maxDistance = 64;             ///< Hamming distance of a descriptor match, at most (of 256)
+  Scalar ratio = Scalar(0.8);       ///< nearest / second-nearest distance, below
+  int minInliers = 20;              ///< Sim(3) inliers of a link
+  Scalar thresholdPx = Scalar(4);   ///< reprojection error of a Sim(3) inlier, in both keyframes
+  Scalar maxDepthError = Scalar(0.1);  ///< and its 3D error, relative to its depth (sim3_ransac.hpp)
+
+  /// Throws hawor::Error naming the first bad field.
+  void validate() const {
+    if (minVotes < 1 || candidates < 1 || minFramesApart < 0) throw Error("place.minVotes and place.candidates must be >= 1, place.minFramesApart >= 0");
+    if (maxDistance < 0 || maxDistance > 256) throw Error("place.maxDistance must be in [0, 256]");
+    if (!(ratio > Scalar(0) && ratio <= Scalar(1))) throw Error("place.ratio must be in (0, 1]");
+    if (minInliers < 3) throw Error("place.minInliers must be >= 3");
+    if (!(thresholdPx > Scalar(0))) throw Error("place.thresholdPx must be > 0");
+    if (!(maxDepthError >= Scalar(0))) throw Error("place.maxDepthError must be >= 0");
   }
 };
 
@@ -314,6 +348,7 @@ struct SlamOptions {
   Scalar relocMaxShiftPx = Scalar(40);
   int relocMinInliers = 30;
   Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
+  SlamPlaceOptions<Scalar> place;   ///< place recognition between keyframes, segments joined by it
   // Keyframes and mapping.
   KeyframePolicyOptions<Scalar> keyframe;  ///< when a tracked frame becomes one (keyframe_policy.hpp)
   Scalar minTriangulationDeg = Scalar(0.6);
@@ -380,6 +415,8 @@ struct SlamResult {
   int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
   int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
   int numRevisitPoints = 0;           ///< old map points found again by the revisit search
+  int numPlaceLinks = 0;              ///< keyframes linked to an older one of the same place (SlamOptions::place)
+  int numPlacedSegments = 0;          ///< map segments moved into an earlier one's world by those links
   int numRefinedFrames = 0;           ///< frames adjusted by the sequence refinement (0: not run)
   int numHeadModelFrames = 0;         ///< unposed frames placed by the head model
   bool initialised = false;           ///< a map was ever built (false: rotation-only output)
@@ -415,6 +452,7 @@ class MonoSlam {
     opt_.init.validate();
     opt_.turn.validate();
     opt_.keyframe.validate();
+    opt_.place.validate();
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
     // every focal refinement's prior stays on the focal given here (or focal.priorFx)
     if (!(opt_.focal.priorFx > Scalar(0))) opt_.focal.priorFx = cam_.fx;
@@ -515,6 +553,14 @@ class MonoSlam {
     CoarseMask mask;
     std::vector<int> points;  ///< map points it observes
     int segment;
+    std::vector<BinaryDescriptor> desc;  ///< SlamOptions::place: of its map points seen in its image
+    std::vector<int> descPoint;          ///< their map points
+    std::vector<V2> descUv;              ///< and pixels
+  };
+  struct PlaceLink {
+    int kf;      ///< keyframe linked
+    int oldKf;   ///< to this older one
+    std::vector<std::pair<int, int>> pairs;  ///< (point seen by kf, point seen by oldKf): one physical point
   };
   struct KeyframePyramid {
     int kf = -1;
@@ -578,6 +624,11 @@ class MonoSlam {
   int linkChainStart(const SegmentLink& l) const;
   void applySegmentLinks();
 
+  // place recognition (mono_slam/place_links.hpp)
+  void describeAndLinkKeyframe(int k);
+  bool verifyPlaceLink(int k, int c, int votes);
+  int placeSegmentsByLinks();
+
   // mapping (mono_slam/mapping.hpp)
   void keepPyramid(std::vector<KeyframePyramid>& store, int capacity, int k, bool anchor = false);
   void keepRelocPyramid(int k);
@@ -637,6 +688,10 @@ class MonoSlam {
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
   std::vector<SegmentLink> links_;  ///< SlamOptions::segmentLinks
+  BinaryDescriptorExtractor describer_;  ///< SlamOptions::place
+  PlaceIndex placeIndex_;
+  std::vector<PlaceLink> placeLinks_;
+  int placedSegments_ = 0;
   int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0, revisitPoints_ = 0, refinedFrames_ = 0, headModelFrames_ = 0;
   /// Frame ranges [a, b) of the segments placed by the head model (headModelPlaceShort): their
   /// keyframe depths and points are in a scale of their own and are left out of the result.
@@ -674,6 +729,7 @@ class MonoSlam {
 #include "mono_slam/initialisation.hpp"
 #include "mono_slam/tracking.hpp"
 #include "mono_slam/relocalisation.hpp"
+#include "mono_slam/place_links.hpp"
 #include "mono_slam/mapping.hpp"
 #include "mono_slam/finish.hpp"
 #include "mono_slam/segment_joins.hpp"

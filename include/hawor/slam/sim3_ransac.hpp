@@ -5,7 +5,8 @@
 // RANSAC (ransac.hpp, MSAC) over 3-point samples, each solved in closed form (Umeyama,
 // alignment.hpp); a match is an inlier when both reprojections fit (ORB-SLAM's Sim3Solver test,
 // Mur-Artal & Tardós 2017): ‖π(S·P₂) − u₁‖ and ‖π(S⁻¹·P₁) − u₂‖ below thresholdPx, with π the
-// camera's projection and u the points' observed pixels. The winner is re-fitted on its inliers
+// camera's projection and u the points' observed pixels (and, with maxDepthError, when the two
+// positions agree in 3D). The winner is re-fitted on its inliers
 // (Umeyama; 3D errors weighted by 1/depth², which turns them into image-plane errors) and its
 // inliers recounted. A point behind either camera after the transform is no inlier.
 // Pure function of its inputs; deterministic for a seed (the same natively and in WASM).
@@ -32,6 +33,11 @@ struct Sim3RansacOptions {
   int maxIterations = 300;
   Scalar confidence = Scalar(0.999);
   int minInliers = 20;             ///< fewer: not found
+  /// An inlier's two positions also agree in 3D: ‖S·P₂ − P₁‖ ≤ maxDepthError·z₁ (0: not checked).
+  /// Reprojection alone does not see depth when the two cameras are near each other (a head
+  /// looking around in place): two maps of little parallax match in the image whatever their
+  /// depths, and their Sim(3)'s scale is then arbitrary.
+  Scalar maxDepthError = Scalar(0);
   std::uint32_t seed = 0x51a3u;
 };
 
@@ -61,6 +67,9 @@ Sim3RansacResult<Scalar> solveSim3Ransac(const std::vector<Vec3<Scalar>>& P1, co
     const V3 a = S * P2[static_cast<std::size_t>(i)];
     const V3 b = Si * P1[static_cast<std::size_t>(i)];
     if (!(a.z() > Scalar(0)) || !(b.z() > Scalar(0))) return std::numeric_limits<Scalar>::infinity();
+    if (opt.maxDepthError > Scalar(0) && (a - P1[static_cast<std::size_t>(i)]).norm() > opt.maxDepthError * P1[static_cast<std::size_t>(i)].z()) {
+      return std::numeric_limits<Scalar>::infinity();
+    }
     const Scalar e1 = (cam.project(a) - uv1[static_cast<std::size_t>(i)]).squaredNorm();
     const Scalar e2 = (cam.project(b) - uv2[static_cast<std::size_t>(i)]).squaredNorm();
     return std::max(e1, e2);

@@ -2,7 +2,8 @@
 // Shi–Tomasi corners with bucketing, pyramidal KLT), minimal solvers and robust estimation
 // (RANSAC, 5-point essential, homography, P3P, PnP-RANSAC, triangulation, two-view
 // initialisation), sparse bundle adjustment, the full-sequence refinement, the head model of a
-// standing wearer, and the monocular SLAM system with dual hand masking.
+// standing wearer, place recognition (binary descriptors, a keyframe index, Sim(3) RANSAC), a
+// Sim(3) pose graph, and the monocular SLAM system with dual hand masking.
 #pragma once
 
 #include "image_pyramid.hpp"
@@ -23,5 +24,9 @@
 #include "focal_refine.hpp"
 #include "sequence_refine.hpp"
 #include "head_motion.hpp"
+#include "binary_descriptor.hpp"
+#include "place_index.hpp"
+#include "sim3_ransac.hpp"
+#include "pose_graph.hpp"
 #include "mono_slam.hpp"
 #include "slam_option_table.hpp"

@@ -1,7 +1,7 @@
 // hawor/slam/slam_option_table.hpp — SlamOptions by name: `setSlamOption(options, "initMinTracks",
 // "40")`, for tools that try a setting without a rebuild (`hawor slam --set NAME=VALUE,...`, the
 // SLAM benchmarks' ablations). The numeric and boolean fields of SlamOptions and of its
-// parts' option structs (init., turn., keyframe., corners., klt., twoView., pnp., bridge.,
+// parts' option structs (init., place., turn., keyframe., corners., klt., twoView., pnp., bridge.,
 // sequence., headModel., focal. NAME); values are checked (an integer for an int, a finite number,
 // true/false/1/0 for a bool) and an unknown name is an error that lists the known ones.
 #pragma once
@@ -66,6 +66,11 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"init.minTracks", [](O& o) -> T& { return o.init.minTracks; }},
       {"init.reinitMinTracks", [](O& o) -> T& { return o.init.reinitMinTracks; }},
       {"init.maxGap", [](O& o) -> T& { return o.init.maxGap; }},
+      {"place.minVotes", [](O& o) -> T& { return o.place.minVotes; }},
+      {"place.candidates", [](O& o) -> T& { return o.place.candidates; }},
+      {"place.minFramesApart", [](O& o) -> T& { return o.place.minFramesApart; }},
+      {"place.maxDistance", [](O& o) -> T& { return o.place.maxDistance; }},
+      {"place.minInliers", [](O& o) -> T& { return o.place.minInliers; }},
       {"turn.holdFrames", [](O& o) -> T& { return o.turn.holdFrames; }},
       {"turn.minInliers", [](O& o) -> T& { return o.turn.minInliers; }},
       {"turn.maxBridgeFrames", [](O& o) -> T& { return o.turn.maxBridgeFrames; }},
@@ -130,6 +135,9 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
       {"focalMinStd", [](O& o) -> T& { return o.focalMinStd; }},
       {"init.minFlowPx", [](O& o) -> T& { return o.init.minFlowPx; }},
       {"init.minRotationDeg", [](O& o) -> T& { return o.init.minRotationDeg; }},
+      {"place.ratio", [](O& o) -> T& { return o.place.ratio; }},
+      {"place.thresholdPx", [](O& o) -> T& { return o.place.thresholdPx; }},
+      {"place.maxDepthError", [](O& o) -> T& { return o.place.maxDepthError; }},
       {"turn.rateDeg", [](O& o) -> T& { return o.turn.rateDeg; }},
       {"turn.rotationAgreementDeg", [](O& o) -> T& { return o.turn.rotationAgreementDeg; }},
       {"turn.bridgeMinParallaxDeg", [](O& o) -> T& { return o.turn.bridgeMinParallaxDeg; }},
@@ -214,6 +222,7 @@ const std::vector<Field<SlamOptions<Scalar>, bool>>& boolFields() {
       {"headModelFill", [](O& o) -> T& { return o.headModelFill; }},
       {"refineFocal", [](O& o) -> T& { return o.refineFocal; }},
       {"init.thirdView", [](O& o) -> T& { return o.init.thirdView; }},
+      {"place.enabled", [](O& o) -> T& { return o.place.enabled; }},
       {"turn.bridge", [](O& o) -> T& { return o.turn.bridge; }},
       {"klt.forwardBackward", [](O& o) -> T& { return o.klt.forwardBackward; }},
       {"twoView.essentialOverPlane", [](O& o) -> T& { return o.twoView.essentialOverPlane; }},

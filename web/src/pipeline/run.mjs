@@ -100,7 +100,7 @@
 //                 when none), focalReason (why refined / kept / declined), focalPasses (2: the
 //                 SLAM ran again with the refined focal) },
 //   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, numRevisitPoints,
-//           numRefinedFrames, numHeadModelFrames, initialised },
+//           numPlaceLinks, numPlacedSegments, numRefinedFrames, numHeadModelFrames, initialised },
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
@@ -795,7 +795,7 @@ export async function runPipeline(source, options, hooks = {}) {
       intrinsics: intrOut,
       slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
         numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, numRevisitPoints: traj.numRevisitPoints,
-        numRefinedFrames: traj.numRefinedFrames, numHeadModelFrames: traj.numHeadModelFrames, initialised: traj.initialised },
+        numPlaceLinks: traj.numPlaceLinks, numPlacedSegments: traj.numPlacedSegments, numRefinedFrames: traj.numRefinedFrames, numHeadModelFrames: traj.numHeadModelFrames, initialised: traj.initialised },
       camera: { positions, quaternions, status: traj.status, timestamps },
       points,
       scale,

@@ -86,6 +86,13 @@ bool MonoSlam<Scalar>::refineWholeSequence() {
       unite(i, firstTrack[static_cast<std::size_t>(pid)]);
     }
   }
+  // Place links (SlamOptions::place): the two points of a link are one physical point.
+  for (const PlaceLink& l : placeLinks_) {
+    for (const auto& pr : l.pairs) {
+      const int a = firstTrack[static_cast<std::size_t>(pr.first)], b = firstTrack[static_cast<std::size_t>(pr.second)];
+      if (a >= 0 && b >= 0) unite(a, b);
+    }
+  }
   std::vector<SE3T> poses(static_cast<std::size_t>(n));
   std::vector<char> usable(static_cast<std::size_t>(n));
   std::vector<std::vector<TrackObservation<Scalar>>> obs(static_cast<std::size_t>(n));
@@ -276,6 +283,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   if (opt_.sequenceRefine && opt_.headModelJoin && opt_.headModelJoinAll && opt_.headModelJoinBeforeRefine && resets_ > 0) {
     joinAllSegmentsByHead(false);
   }
+  if (opt_.place.enabled && resets_ > 0) placedSegments_ = placeSegmentsByLinks();
   bool sequenceDone = opt_.sequenceRefine && everInitialised_ && refineWholeSequence();
   // The refinement's points and inliers were chosen at the old focal: repeat while it moves
   // (at most 3 times); the result reports the first guess and the last estimate.
@@ -377,6 +385,8 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   res.numResets = resets_;
   res.numRelocalisations = relocalisations_;
   res.numRevisitPoints = revisitPoints_;
+  res.numPlaceLinks = static_cast<int>(placeLinks_.size());
+  res.numPlacedSegments = placedSegments_;
   res.numRefinedFrames = refinedFrames_;
   res.numHeadModelFrames = headModelFrames_;
   res.initialised = everInitialised_;

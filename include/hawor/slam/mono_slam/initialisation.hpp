@@ -186,8 +186,8 @@ void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const st
   auto toWorld = [&](const V3& x) { return V3(Tref * V3(s * x)); };
   SE3T T1 = Tref * SE3T(tv.T_c1_c2.rotation(), V3(s * tv.T_c1_c2.translation()));
   const int k0 = static_cast<int>(keyframes_.size());
-  keyframes_.push_back(Keyframe{refFrame_, Tref, refMask_, {}, seg});
-  keyframes_.push_back(Keyframe{f, T1, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, seg});
+  keyframes_.push_back(Keyframe{refFrame_, Tref, refMask_, {}, seg, {}, {}, {}});
+  keyframes_.push_back(Keyframe{f, T1, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, seg, {}, {}, {}});
   for (std::size_t j = 0; j < idx.size(); ++j) {
     Track& t = tracks_[static_cast<std::size_t>(idx[j])];
     const V2 u0(Scalar(t.refUv(0)), Scalar(t.refUv(1))), u1(Scalar(t.uv(0)), Scalar(t.uv(1)));

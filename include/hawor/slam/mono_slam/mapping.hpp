@@ -62,6 +62,7 @@ void MonoSlam<Scalar>::closeKeyframe(Frame& fr) {
        keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.relocSpacing)) {
     keepRelocPyramid(k);
   }
+  if (opt_.place.enabled && current) describeAndLinkKeyframe(k);
   lastKfInliers_ = countMapped();
   framesSinceKf_ = 0;
   replenish();
@@ -77,7 +78,7 @@ void MonoSlam<Scalar>::insertKeyframe(int f) {
   if (opt_.segmentLinks) searchSegmentLinks(f);
   Frame& fr = frames_.back();
   const int k = static_cast<int>(keyframes_.size());
-  keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_});
+  keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_, {}, {}, {}});
   const SE3T Tcw = fr.T.inverse();
   const Scalar cosMin = std::cos(opt_.minTriangulationDeg * Constants<Scalar>::pi() / Scalar(180));
   const Scalar maxErr2 = opt_.maxReprojPx * opt_.maxReprojPx;
