@@ -1,7 +1,8 @@
 // Place recognition's parts: the binary descriptors (binary_descriptor.hpp) by their invariances
 // (exact under translation and positive affine intensity changes, near under a 90° rotation of
 // the image) and their distinctiveness; the matching and the place index against brute force
-// written out here; the Sim(3) RANSAC (sim3_ransac.hpp) against a known similarity with outliers;
+// written out here; the Sim(3) RANSAC (sim3_ransac.hpp) against a known similarity with outliers
+// and with matches that agree only in the image (maxDepthError);
 // the Sim(3) pose graph (pose_graph.hpp) against consistent poses and a least-squares answer
 // solved here.
 #include <catch2/catch.hpp>
@@ -281,4 +282,36 @@ TEMPLATE_TEST_CASE("optimisePoseGraph: weighted scale edges give the least-squar
   auto bad = edges;
   bad[0].j = 7;
   CHECK_THROWS_AS(hawor::optimisePoseGraph(nodes, bad, std::vector<char>{1, 0, 0}), hawor::Error);
+}
+
+TEMPLATE_TEST_CASE("solveSim3Ransac: maxDepthError refuses matches that agree only in the image", "[slam][place]", float, double) {
+  using S = TestType;
+  using V3 = hawor::Vec3<S>;
+  using V2 = hawor::Vec2<S>;
+  hawor::PinholeCamera<S> cam{S(400), S(400), S(320), S(240)};
+  // the two cameras at one place (a head looking around): depth is invisible to reprojection
+  const hawor::Sim3<S> truth(S(2), hawor::SO3<S>::exp(V3(S(0), S(0.4), S(0))), V3::Zero());
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::vector<V3> P1, P2;
+  std::vector<V2> u1, u2;
+  for (int i = 0; i < 60; ++i) {
+    const V3 p2(S(U(rng)), S(U(rng) * 0.7), S(3 + U(rng)));
+    V3 p1 = truth * p2;
+    if (!(p1.z() > S(0.5))) continue;
+    u1.push_back(cam.project(p1));
+    u2.push_back(cam.project(p2));
+    if (i % 2 == 0) p1 *= S(1.6);  // half: the same ray, a depth 60 % off
+    P1.push_back(p1), P2.push_back(p2);
+  }
+  hawor::Sim3RansacOptions<S> o;
+  o.minInliers = 10;
+  const auto plain = hawor::solveSim3Ransac(P1, P2, u1, u2, cam, o);
+  REQUIRE(plain.found);
+  CHECK(plain.numInliers > int(P1.size()) * 9 / 10);  // reprojection accepts the wrong depths
+  o.maxDepthError = S(0.1);
+  const auto checked = hawor::solveSim3Ransac(P1, P2, u1, u2, cam, o);
+  REQUIRE(checked.found);
+  CHECK(checked.numInliers <= int(P1.size()) / 2 + 1);
+  CHECK(checked.numInliers >= int(P1.size()) / 2 - 3);
 }
