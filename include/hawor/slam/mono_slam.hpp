@@ -650,7 +650,7 @@ class MonoSlam {
   void fillUnposed(int from = 0, int to = -1);
 
   // joining map segments after resets (mono_slam/segment_joins.hpp)
-  template <typename G> void transformFrom(int f1, int seg, const G& g);
+  template <typename G> void transformFrom(int f1, int seg, const G& g, const SO3<Scalar>* R = nullptr);
   std::vector<int> segmentFirstKeyframes() const;
   void joinSegmentPairsByHead();
   bool joinAllSegmentsByHead(bool placeShort = true);

@@ -144,14 +144,7 @@ int MonoSlam<Scalar>::placeSegmentsByLinks() {
                std::to_string(double(SO3<Scalar>::fromMatrix(G.R).log().norm() * Scalar(180) / Constants<Scalar>::pi())) + " deg");
     }
     const Sim3<Scalar> S = G.toSim3();
-    auto move = [&](const SE3T& T) { return SE3T(SO3<Scalar>(S.rotation() * T.rotation()), V3(S * V3(T.translation()))); };
-    for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) frames_[f].T = move(frames_[f].T);
-    for (Keyframe& kf : keyframes_) {
-      if (kf.segment >= seg) kf.T = move(kf.T);
-    }
-    for (MapPoint& p : points_) {
-      if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = S * V3(p.X);
-    }
+    transformFrom(f1, seg, [&](const V3& x) { return V3(S * x); }, &S.rotation());
     ++moved;
   }
   return moved;

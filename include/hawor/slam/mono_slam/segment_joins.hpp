@@ -8,18 +8,16 @@
 
 namespace hawor {
 
-/// Applies the position map `g` (a similarity without rotation) to the frames from f1 on, the
-/// keyframes of segment `seg` and later ones, and their points (later segments continue its
-/// scale).
+/// Applies the position map `g` (a similarity; `R`, when given, its rotation, else none) to the
+/// frames from f1 on, the keyframes of segment `seg` and later ones, and their points (later
+/// segments continue its scale).
 template <typename Scalar>
 template <typename G>
-void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g) {
-  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) {
-    Frame& fr = frames_[f];
-    fr.T = SE3T(fr.T.rotation(), g(V3(fr.T.translation())));
-  }
+void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g, const SO3<Scalar>* R) {
+  auto move = [&](const SE3T& T) { return SE3T(R ? SO3<Scalar>(*R * T.rotation()) : T.rotation(), g(V3(T.translation()))); };
+  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) frames_[f].T = move(frames_[f].T);
   for (Keyframe& kf : keyframes_) {
-    if (kf.segment >= seg) kf.T = SE3T(kf.T.rotation(), g(V3(kf.T.translation())));
+    if (kf.segment >= seg) kf.T = move(kf.T);
   }
   for (MapPoint& p : points_) {
     if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
