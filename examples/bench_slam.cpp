@@ -16,7 +16,7 @@
 //   --log          each run's diagnostics (initialisation, keyframes, losses) on stderr
 //   --set NAME=VALUE,...  SlamOptions fields by name for both runs, the ablations
 //                  (slam/slam_option_table.hpp; as `hawor slam --set`), e.g.
-//                  --set relocalise=false,sequence.headPrior=false
+//                  --set reloc.anchors=4,sequence.headPrior=false
 #include <sys/resource.h>
 
 #include <algorithm>

@@ -64,7 +64,7 @@ const char* kSlamHelp =
     "                        is the guess (the trajectory then uses the refined focal)\n"
     "  --focal-prior S       std of log(f / guess) of the guess (default 0.3, a FOV guess)\n"
     "  --set NAME=VALUE,...  set SlamOptions fields by name, for ablations (for example\n"
-    "                        --set init.minRotationDeg=9,relocalise=false; twoView.NAME for\n"
+    "                        --set init.minRotationDeg=9,reloc.anchors=4; twoView.NAME for\n"
     "                        the initialisation's); an unknown name lists the known ones\n"
     "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
     "                        PnP, keyframes, losses)\n"
@@ -137,9 +137,9 @@ int cmdSlam(int argc, char** argv) {
   const double readout = args.number("readout", 0.0);
   if (!(std::abs(readout) <= 1.0 / fps)) throw UsageError("--readout must be between -1/fps and 1/fps seconds");
   opt.rollingShutter = readout * fps;
-  opt.refineFocal = args.flag("refine-focal");
+  opt.finish.refineFocal = args.flag("refine-focal");
   if (args.has("focal-prior")) {
-    if (!opt.refineFocal) throw UsageError("--focal-prior needs --refine-focal");
+    if (!opt.finish.refineFocal) throw UsageError("--focal-prior needs --refine-focal");
     opt.focal.priorSigmaLog = args.number("focal-prior", 0.3);
     if (!(opt.focal.priorSigmaLog > 0)) throw UsageError("--focal-prior must be > 0");
   }
@@ -270,7 +270,7 @@ int cmdSlam(int argc, char** argv) {
       .integer("rectified_outside", static_cast<long long>(rectify.numOutside()))
       .num("median_ms_per_frame", hawor::percentile(ms, 0.5))
       .num("p95_ms_per_frame", hawor::percentile(ms, 0.95));
-  if (opt.refineFocal) {
+  if (opt.finish.refineFocal) {
     j.num("focal_fx", r.camera.fx)
         .num("focal_guess_fx", r.focal.guessFx)
         .raw("focal_refined", r.focal.changed ? "true" : "false")

@@ -432,7 +432,7 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
   return guard("MonoSlam", [&] {
     hawor::SlamOptions<double> opt;
     if (!absent(options) && !absent(options["useMasks"])) opt.useMasks = options["useMasks"].as<bool>();
-    if (!absent(options) && !absent(options["refineFocal"])) opt.refineFocal = options["refineFocal"].as<bool>();
+    if (!absent(options) && !absent(options["refineFocal"])) opt.finish.refineFocal = options["refineFocal"].as<bool>();
     if (!absent(options) && !absent(options["rollingShutter"])) {
       opt.rollingShutter = options["rollingShutter"].as<double>();
       if (!(std::abs(opt.rollingShutter) <= 1)) throw hawor::Error("rollingShutter must be in [-1, 1] (readout / frame interval; negative: rows read bottom to top)");

@@ -60,10 +60,15 @@ def declared_options():
         body = body[:body.index(end)]
         return re.findall(r"^\s+(?:int|Scalar|float|bool)\s+(\w+)\s*=", body, re.M)
 
-    names = set(fields("mono_slam.hpp", "SlamOptions", "  SlamOptions() {"))
-    for prefix, header, struct in (("init", "mono_slam.hpp", "SlamInitOptions"),
-                                   ("place", "mono_slam.hpp", "SlamPlaceOptions"),
-                                   ("turn", "mono_slam.hpp", "SlamTurnOptions"),
+    names = set(fields("slam_options.hpp", "SlamOptions", "  /// Throws"))
+    for prefix, header, struct in (("init", "slam_options.hpp", "SlamInitOptions"),
+                                   ("turn", "slam_options.hpp", "SlamTurnOptions"),
+                                   ("reloc", "slam_options.hpp", "SlamRelocOptions"),
+                                   ("revisit", "slam_options.hpp", "SlamRevisitOptions"),
+                                   ("link", "slam_options.hpp", "SlamLinkOptions"),
+                                   ("place", "slam_options.hpp", "SlamPlaceOptions"),
+                                   ("finish", "slam_options.hpp", "SlamFinishOptions"),
+                                   ("join", "slam_options.hpp", "SlamJoinOptions"),
                                    ("keyframe", "keyframe_policy.hpp", "KeyframePolicyOptions"),
                                    ("corners", "corners.hpp", "CornerOptions"), ("klt", "klt.hpp", "KltOptions"),
                                    ("twoView", "two_view.hpp", "TwoViewOptions"),

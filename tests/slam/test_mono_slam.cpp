@@ -208,7 +208,8 @@ TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the
   // so no new scale), the first pose back is Relocalised; without relocalisation a second map
   // segment starts.
   hawor::SlamOptions<double> on, off;
-  off.relocalise = false;
+  off.reloc.enabled = false;
+  off.revisit.enabled = false;  // (it searches relocalisation's kept keyframes)
   const Run r = runPreset("table_work", 90, true, 1, 40, 49, on);
   const Run q = runPreset("table_work", 90, true, 1, 40, 49, off);
   const auto& a = r.result;
@@ -231,7 +232,7 @@ TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the
   CHECK(ate < 0.03 * r.path);
 }
 
-TEST_CASE("MonoSlam: a view seen before a broken rotation chain puts the later frames' rotation right (segmentLinks)", "[slam][system]") {
+TEST_CASE("MonoSlam: a view seen before a broken rotation chain puts the later frames' rotation right (link.enabled)", "[slam][system]") {
   // fast_turns, seed 8 (full-resolution textures, as `hawor synth` writes it): the map is lost
   // in a turn at frame 88; at frame 186 the head turns from rest onto a bare wall and no frame
   // gives the rotation of the next 86 degrees, so the segment built after it (frame ~200) lives
@@ -240,7 +241,7 @@ TEST_CASE("MonoSlam: a view seen before a broken rotation chain puts the later f
   // the old world, and finish() rotates the chain after the break by it. Without the links the
   // offset stays to the end.
   hawor::SlamOptions<double> on, off;
-  off.segmentLinks = false;
+  off.link.enabled = false;
   const int n = 262;
   const Run r = runPreset("fast_turns", n, true, 8, -1, -2, on, 1);
   const Run q = runPreset("fast_turns", n, true, 8, -1, -2, off, 1);
@@ -357,8 +358,8 @@ TEST_CASE("MonoSlam: the revisit search and the sequence refinement tighten a ta
   // (measured: 8.5 % of the path with both off, 3.5 % on; the first frames, before a map, carry
   // most of what is left).
   hawor::SlamOptions<double> off;
-  off.revisitSearch = false;
-  off.sequenceRefine = false;
+  off.revisit.enabled = false;
+  off.finish.sequenceRefine = false;
   const Run on = runPreset("table_work", 150, true, 3);
   const Run plain = runPreset("table_work", 150, true, 3, -1, -2, off);
   const int n = static_cast<int>(on.result.poses.size());

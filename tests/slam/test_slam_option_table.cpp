@@ -12,16 +12,18 @@ TEMPLATE_TEST_CASE("setSlamOptions sets fields by name", "[slam][options]", floa
   using O = hawor::SlamOptions<TestType>;
   O o;
   const O d;
-  hawor::setSlamOptions(o, "init.minTracks=41,init.minFlowPx=2.5,relocalise=false,klt.maxResidual=9,twoView.minTriangulated=12,"
-                           "pnp.thresholdPx=1.5,corners.cellSize=16,useMasks=0");
+  hawor::setSlamOptions(o, "init.minTracks=41,init.minFlowPx=2.5,reloc.enabled=false,klt.maxResidual=9,twoView.minTriangulated=12,"
+                           "pnp.thresholdPx=1.5,corners.cellSize=16,useMasks=0,join.placeShort=false,finish.focalMinStd=0.05");
   CHECK(o.init.minTracks == 41);
   CHECK(o.init.minFlowPx == TestType(2.5));
-  CHECK(o.relocalise == false);
+  CHECK(o.reloc.enabled == false);
   CHECK(o.klt.maxResidual == 9.0f);
   CHECK(o.twoView.minTriangulated == 12);
   CHECK(o.pnp.thresholdPx == TestType(1.5));
   CHECK(o.corners.cellSize == 16);
   CHECK(o.useMasks == false);
+  CHECK(o.join.placeShort == false);
+  CHECK(o.finish.focalMinStd == TestType(0.05));
   CHECK(o.init.reinitMinTracks == d.init.reinitMinTracks);  // untouched
   CHECK(o.twoView.minParallaxDeg == d.twoView.minParallaxDeg);
   hawor::setSlamOptions(o, "");  // nothing
@@ -55,8 +57,44 @@ TEMPLATE_TEST_CASE("setSlamOptions refuses malformed settings", "[slam][options]
   CHECK(refused("init.minTracks=1e12", "integer"));
   CHECK(refused("init.minFlowPx=inf", "finite"));
   CHECK(refused("init.minFlowPx=3px", "finite"));
-  CHECK(refused("relocalise=yes", "true, false"));
-  CHECK(refused("relocalise", "NAME=VALUE"));
+  CHECK(refused("reloc.enabled=yes", "true, false"));
+  CHECK(refused("reloc.enabled", "NAME=VALUE"));
   CHECK(refused("=1", "NAME=VALUE"));
   CHECK(refused("init.minTracks=40,,", "NAME=VALUE"));
+}
+
+TEMPLATE_TEST_CASE("SlamOptions::validate names the bad field or combination", "[slam][options]", float, double) {
+  using O = hawor::SlamOptions<TestType>;
+  const auto message = [](const O& o) -> std::string {
+    try {
+      o.validate();
+    } catch (const hawor::Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  CHECK(message(O{}).empty());  // the defaults are valid
+  const auto with = [](const std::string& list) {
+    O o;
+    hawor::setSlamOptions(o, list);
+    return o;
+  };
+  CHECK(message(with("reloc.enabled=false")).find("revisit.enabled needs reloc.enabled") != std::string::npos);
+  CHECK(message(with("reloc.enabled=false,revisit.enabled=false")).empty());
+  CHECK(message(with("join.headModelAll=false")).find("join.headModelAll") != std::string::npos);
+  CHECK(message(with("join.headModelAll=false,join.beforeRefine=false,join.placeShort=false")).empty());
+  CHECK(message(with("reloc.spacing=0")).find("reloc.spacing") != std::string::npos);
+  CHECK(message(with("revisit.minInliers=3")).find("revisit.minInliers") != std::string::npos);
+  CHECK(message(with("link.everyFrames=0")).find("link.everyFrames") != std::string::npos);
+  CHECK(message(with("place.ratio=1.5")).find("place.ratio") != std::string::npos);
+  CHECK(message(with("finish.focalFrameSpacing=0")).find("finish.focalFrameSpacing") != std::string::npos);
+  CHECK(message(with("rollingShutter=1.5")).find("rollingShutter") != std::string::npos);
+  CHECK(message(with("maxFeatures=5")).find("maxFeatures") != std::string::npos);
+  CHECK(message(with("init.everyFrames=0")).find("init.everyFrames") != std::string::npos);
+  // MonoSlam refuses them at construction, with the same message
+  hawor::PinholeCamera<TestType> cam;
+  cam.fx = cam.fy = TestType(500);
+  cam.cx = TestType(320);
+  cam.cy = TestType(240);
+  CHECK_THROWS_WITH(hawor::MonoSlam<TestType>(cam, with("reloc.enabled=false")), Catch::Contains("revisit.enabled"));
 }

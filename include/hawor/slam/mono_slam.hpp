@@ -27,11 +27,7 @@
 //      jumped (KLT locked onto a weak texture off the true match at a turn's onset) and is
 //      dropped, and a two-view whose best motion puts fewer than minInFrontRatio of its inliers
 //      in front of both cameras is refused (two_view.hpp).
-//      With a map: RE-FINDING first (optional, off by default) while fewer than refindBelow map
-//      points are tracked: the points of the last refindKeyframes keyframes (their pyramids are
-//      kept) that no track follows are projected under the predicted pose and searched by KLT
-//      from the keyframe's image (a point covered by a hand, or out of view in a turn, comes
-//      back as the same map point instead of a new unmapped corner). Then the pose by P3P-RANSAC + robust LM on the
+//      With a map: Then the pose by P3P-RANSAC + robust LM on the
 //      tracks' map points (pnp_ransac.hpp);
 //      in turn mode a pose from as few as turn.minInliers points is accepted when its rotation
 //      agrees with the rays' (the map leaves the view faster than new points are made); when
@@ -42,7 +38,7 @@
 //      keyframe, so the tracks born in the turn are triangulated and the map goes on.
 //   4. Keyframes when the tracked map points fall below a fraction of the last keyframe's, below
 //      an absolute count, after a maximum interval, or in turn mode after keyframe.maxRotationDeg
-//      of rotation (new corners only come at keyframes). REVISITS first (revisitSearch, on): the
+//      of rotation (new corners only come at keyframes). REVISITS first (revisit.enabled, on): the
 //      points of kept keyframes (relocalisation's) of this segment that looked at the current view
 //      a while ago are searched under the current pose, and kept as tracks of those old points when
 //      a PnP on them alone agrees with the tracked pose (the head looks back at a place: the
@@ -57,8 +53,8 @@
 //      described by binary descriptors in its image and the older keyframes indexed by theirs are
 //      asked for the same place (another segment's, or this one's a while ago); a candidate
 //      verified by a Sim(3) over matched map points is a place link.
-//   5. Tracking loss (too few PnP inliers): RELOCALISATION first (relocalise, on by default):
-//      the map points of a few kept keyframes (relocKeyframes, relocSpacing frames apart) are
+//   5. Tracking loss (too few PnP inliers): RELOCALISATION first (reloc.enabled, on by default):
+//      the map points of a few kept keyframes (reloc.keyframes, reloc.spacing frames apart) are
 //      projected under the frame's guess (rotation from the tracked rays, position held) and
 //      searched by KLT from those keyframes' images; PnP-RANSAC on them, its rotation checked
 //      against the rays' (or, where the ray chain disagrees, two consecutive relocalisations
@@ -72,7 +68,7 @@
 //      continuous across the join. A segment that later sees the old map again is not merged
 //      with it; but when the rotation chain to the old segment is broken (frames with no
 //      rotation, or one only carried on), the old segment's kept images are searched for the
-//      current view (PLACE RECOGNITION, segmentLinks) and the poses found in the old world fix
+//      current view (PLACE RECOGNITION, link.enabled) and the poses found in the old world fix
 //      the rotation of everything after the break in finish().
 // finish(): the rotation chains after a break turned by their agreeing segment links, segments
 // joined by the head model (head_motion.hpp), a global bundle
@@ -80,7 +76,7 @@
 // its first baseline), every frame's pose re-estimated against the final map from its stored 2D
 // observations (RANSAC for frames without a tracked pose, robust LM otherwise); each segment with
 // place links to earlier ones moved into their world by the linked points; then the
-// SEQUENCE REFINEMENT (sequence_refine.hpp, sequenceRefine, on): every frame's observations of
+// SEQUENCE REFINEMENT (sequence_refine.hpp, finish.sequenceRefine, on): every frame's observations of
 // every track (a track renamed at a reset, tracks that follow one map point, and the two points
 // of a place link, joined) in one
 // bundle adjustment, frames with a guessed position resected, ill-conditioned frames left out;
@@ -92,10 +88,10 @@
 // (pixel, depth along the optical axis, unmasked points only) for the metric-scale step (docs/design.md §6).
 // Memory per frame: the pyramid of two frames, plus the frame's track observations (≈ 12 bytes
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
-// the last init.maxGap frames while no map exists); with re-finding on, the pyramids of the last
-// refindKeyframes keyframes and, for relocalisation, of relocKeyframes recent and up to
-// relocAnchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; after
-// a broken rotation chain, until its links are found, the lost segment's too (segmentLinks); no
+// the last init.maxGap frames while no map exists); for relocalisation, the pyramids of
+// reloc.keyframes recent and up to
+// reloc.anchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; after
+// a broken rotation chain, until its links are found, the lost segment's too (link.enabled); no
 // other images. finish() first
 // lets every image go, then holds every frame's observations twice more (≈ 24 bytes an
 // observation as the sequence refinement's input, 12 grouped by track inside it) and the
@@ -135,6 +131,7 @@
 #include "hawor/slam/pnp_ransac.hpp"
 #include "hawor/slam/sequence_refine.hpp"
 #include "hawor/slam/sim3_ransac.hpp"
+#include "hawor/slam/slam_options.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_bridge.hpp"
 #include "hawor/slam/two_view.hpp"
@@ -158,240 +155,6 @@ inline const char* slamStatusName(SlamStatus s) {
   }
   return "unknown";
 }
-
-/// Initialisation of a map segment (mono_slam/initialisation.hpp): the two-view pair's reference
-/// and when the pair is tried.
-template <typename Scalar>
-struct SlamInitOptions {
-  Scalar minFlowPx = Scalar(4);       ///< median rotation-compensated flow before trying
-  int everyFrames = 3;                ///< frames between two-view attempts
-  int minTracks = 60;
-  int reinitMinTracks = 60;           ///< minTracks after a tracking loss (40 measured: no gain)
-  int maxGap = 60;                    ///< the two-view reference is one of the last this many frames
-  Scalar minRotationDeg = Scalar(8);  ///< in turn mode: try after this much rotation (every other frame)
-  /// Every second frame between the reference and the current one as further views that settle
-  /// a two-fold ambiguity (a planar scene's homography; two_view.hpp).
-  bool thirdView = true;
-
-  /// Throws hawor::Error naming the first bad field.
-  void validate() const {
-    if (!(minFlowPx >= Scalar(0))) throw Error("init.minFlowPx must be >= 0");
-    if (everyFrames < 1) throw Error("init.everyFrames must be >= 1");
-    if (minTracks < 8 || reinitMinTracks < 8) throw Error("init.minTracks and init.reinitMinTracks must be >= 8");
-    if (maxGap < 1) throw Error("init.maxGap must be >= 1");
-    if (!(minRotationDeg > Scalar(0))) throw Error("init.minRotationDeg must be > 0");
-  }
-};
-
-/// Fast head turns (turn mode; mono_slam/front_end.hpp, tracking.hpp).
-template <typename Scalar>
-struct SlamTurnOptions {
-  Scalar rateDeg = Scalar(5);         ///< rotation a frame that starts turn mode (walking: < 3.5)
-  int holdFrames = 5;                 ///< frames it lasts after the last such increment
-  int minInliers = 10;                ///< PnP inliers enough when the rays agree
-  Scalar rotationAgreementDeg = Scalar(1);  ///< PnP vs tracked-ray rotation, for that
-  /// Turn bridge (turn_bridge.hpp): in turn mode, a frame whose PnP fails right after two posed
-  /// frames is posed from the last one and the tracks between them (the step's direction from a
-  /// head sphere, the rotation from the tracks' epipolar geometry, the length from the map points
-  /// still tracked and the tracks triangulated from the two posed frames), at most
-  /// maxBridgeFrames in a row; it becomes a keyframe, so the tracks born in the turn are
-  /// triangulated and the map goes on instead of being reset.
-  bool bridge = true;
-  int maxBridgeFrames = 12;
-  Scalar bridgeMinParallaxDeg = Scalar(0.2);  ///< of a track triangulated from the two posed frames
-  /// A frame whose tracked rays give no rotation turns on at the last step's angular velocity
-  /// (coastRotation), for at most coastFrames frames in a row, from a step of at most
-  /// coastMaxStepDeg (a head peaks near 600°/s, 20° a frame at 30 fps); 0: held instead.
-  int coastFrames = 6;
-  Scalar coastMaxStepDeg = Scalar(20);
-
-  /// Throws hawor::Error naming the first bad field.
-  void validate() const {
-    if (!(rateDeg > Scalar(0))) throw Error("turn.rateDeg must be > 0");
-    if (holdFrames < 0 || maxBridgeFrames < 0 || coastFrames < 0) throw Error("turn.holdFrames, turn.maxBridgeFrames and turn.coastFrames must be >= 0");
-    if (minInliers < 6) throw Error("turn.minInliers must be >= 6");
-    if (!(rotationAgreementDeg >= Scalar(0)) || !(bridgeMinParallaxDeg >= Scalar(0)) || !(coastMaxStepDeg >= Scalar(0))) {
-      throw Error("turn.rotationAgreementDeg, turn.bridgeMinParallaxDeg and turn.coastMaxStepDeg must be >= 0");
-    }
-  }
-};
-
-/// Place recognition between keyframes and the joins it makes (mono_slam/place_links.hpp).
-template <typename Scalar>
-struct SlamPlaceOptions {
-  bool enabled = true;
-  int minVotes = 12;                ///< index votes of a candidate (place_index.hpp)
-  int candidates = 3;               ///< best candidates verified per keyframe
-  int minFramesApart = 30;          ///< a candidate in the keyframe's own segment is this much older
-  int maxDistance = 64;             ///< Hamming distance of a descriptor match, at most (of 256)
-  Scalar ratio = Scalar(0.8);       ///< nearest / second-nearest distance, below
-  int minInliers = 20;              ///< Sim(3) inliers of a link
-  Scalar thresholdPx = Scalar(4);   ///< reprojection error of a Sim(3) inlier, in both keyframes
-  Scalar maxDepthError = Scalar(0.1);  ///< and its 3D error, relative to its depth (sim3_ransac.hpp)
-
-  /// Throws hawor::Error naming the first bad field.
-  void validate() const {
-    if (minVotes < 1 || candidates < 1 || minFramesApart < 0) throw Error("place.minVotes and place.candidates must be >= 1, place.minFramesApart >= 0");
-    if (maxDistance < 0 || maxDistance > 256) throw Error("place.maxDistance must be in [0, 256]");
-    if (!(ratio > Scalar(0) && ratio <= Scalar(1))) throw Error("place.ratio must be in (0, 1]");
-    if (minInliers < 3) throw Error("place.minInliers must be >= 3");
-    if (!(thresholdPx > Scalar(0))) throw Error("place.thresholdPx must be > 0");
-    if (!(maxDepthError >= Scalar(0))) throw Error("place.maxDepthError must be >= 0");
-  }
-};
-
-template <typename Scalar>
-struct SlamOptions {
-  int pyramidLevels = 4;
-  KltOptions klt;
-  CornerOptions corners;
-  int maxFeatures = 350;            ///< live tracks after replenishing at a keyframe
-  /// Rolling shutter: the readout time from the first row to the last as a fraction of the frame
-  /// interval (readout seconds × fps; a phone's CMOS at 30 fps: 0.45–0.9; 0: a global shutter;
-  /// negative: the rows were read bottom to top, as in a clip played backwards).
-  /// Row v is exposed (v − (H−1)/2)/H · readout frames after the middle row; each tracked point
-  /// is brought to the middle row's time, b ← exp(δω)·b, with ω the last frame's rotation fitted
-  /// to the raw pixels (rsRate), before any geometry uses it; KLT keeps the raw pixels. The
-  /// translation during the readout is neglected (docs/design.md §11).
-  Scalar rollingShutter = Scalar(0);
-  bool useMasks = true;             ///< dual hand masking (false: masks are ignored, the ablation)
-  int maskDilatePx = 6;             ///< front-end dilation of the hand mask
-  int maskBlock = 4;                ///< keyframe mask resolution (pixels per bit)
-  // Initialisation.
-  TwoViewOptions<Scalar> twoView;
-  SlamInitOptions<Scalar> init;     ///< when and from which pair a map segment starts
-  // Tracking.
-  PnPRansacOptions<Scalar> pnp;
-  int minInliers = 25;
-  SlamTurnOptions<Scalar> turn;     ///< fast head turns: turn mode, its tracking, the bridge, coasting
-  TurnBridgeOptions<Scalar> bridge;
-  int lostFramesBeforeReset = 4;
-  /// Before a map, tracks more than this far off the frame's rotation from the rays are dropped
-  /// (dropJumpedTracks); 0: off. Measured on fast_turns seeds 1-8 (bench_slam, masked /
-  /// unmasked ATE sums, 300 frames and the first 100): 5° 21.3 / 19.0 and 39.9 / 29.2, 6° 22.7 /
-  /// 19.9 and 29.1 / 17.9, 8° 30.1 / 18.6 and 38.4 / 41.6, off 29.6 / 22.4 and 38.4 / 38.9. Near
-  /// points in a 15°-a-frame turn (the eye 2 cm a frame about the neck) move 4-5° off the rays'
-  /// rotation, and a lower bound drops them.
-  Scalar maxRayJumpDeg = Scalar(6);
-  // Re-finding map points that left the tracks (covered by a hand, out of view and back).
-  /// Recent keyframes whose pyramids are kept for it; 0 (default): off. Measured with 5: the
-  /// kitchen variants backwards 4 -> 6 of 14 within 2 %, the capture set 14 -> 15 of 24 within
-  /// 1 %, but the clean seeds 1-8 fast_turns 7 -> 2, hands_cover 6 -> 4, table_work 8 -> 7
-  /// (docs/experiments.md).
-  int refindKeyframes = 0;
-  int refindBelow = 150;             ///< tried while fewer map points than this are tracked
-  int refindMaxPoints = 200;         ///< KLT attempts a frame, at most
-  Scalar refindMaxShiftPx = Scalar(6);  ///< found this close to the point's predicted projection
-  /// finish(): a segment joined to the one before it by one head
-  /// model fitted to both (head_motion.hpp fitHeadJoin: scale and offset), where it explains them.
-  bool headModelJoin = true;
-  /// finish(), after the sequence refinement: every segment with headModel.minFrames posed
-  /// frames and its views spread over headModel.minSpreadDeg re-joined at once by one head model
-  /// fitted to all of them (fitHeadJoinAll), where it passes the head tests. The pairwise joins
-  /// above run before the bundle adjustments, on positions too noisy for the motion test; a
-  /// segment left out (too short) keeps its join to the one before.
-  bool headModelJoinAll = true;
-  /// With headModelJoinAll: the same join also before the sequence refinement, on the global
-  /// bundle adjustment's poses (short segments keep their frames: the refinement may pose more
-  /// of them). Segments joined in one scale let the refinement's head prior pass its tests and
-  /// its tracks across a reset start consistent (fast_turns seed 6 masked: 1.42 → 0.45 %).
-  bool headModelJoinBeforeRefine = true;
-  /// With headModelJoinAll's model accepted: the posed frames of a segment it left out (too few
-  /// frames or views to fix its scale) are placed by the head model like lost frames (status
-  /// Interpolated); their keyframe depths (empty) and points are left out of the result.
-  bool headModelPlaceShort = true;
-  // Relocalisation after a tracking loss, against the lost segment's map (on by default): the
-  // pyramids of up to relocKeyframes keyframes at least relocSpacing frames apart are kept
-  // (about 1.6 MB each at 640×480); while tracking is lost, and after the reset until a new map
-  // is built, their points are projected under the frame's guess (rotation from the tracked rays,
-  // position held) and searched by KLT from the keyframe images (within relocMaxShiftPx: the
-  // held position is off by the motion since the loss); PnP-RANSAC with relocMinInliers inliers
-  // puts the frame back in the old map, and the old segment goes on (no new scale).
-  bool relocalise = true;
-  /// At each keyframe, search the kept keyframes (relocalise's) that saw the current view a while
-  /// ago (searchRevisits); needs relocalise.
-  bool revisitSearch = true;
-  int revisitMinFrames = 30;                ///< a kept keyframe this many frames old, at least
-  Scalar revisitMaxAngleDeg = Scalar(30);   ///< between its viewing direction and the current one
-  Scalar revisitMaxShiftPx = Scalar(20);    ///< found this close to the projection
-  int revisitMaxPoints = 200;
-  int revisitMinInliers = 20;
-  Scalar revisitMaxRotationDeg = Scalar(2); ///< PnP on the found points vs the tracked pose
-  int relocKeyframes = 10;
-  int relocSpacing = 15;
-  // Place recognition across a break of the rotation chain (a turn onto a bare wall: no frame
-  // gives its rotation, so the next segment's world is rotated by the unseen turn). The lost
-  // segment's kept images (relocalise's, and its last keyframe's) stay; at each keyframe after
-  // the break, and on every linkEveryFrames-th frame without a map pose, each is tried as the
-  // place: its points are searched by KLT around where it saw them (guesses: its own view, and
-  // turned about its vertical axis), and PnP-RANSAC gives the frame's pose in the old world (a
-  // link). finish() rotates the frames after the break (and everything after them) by
-  // C = R_old·Rᵀ when two links agree; the joins then place and scale them.
-  bool segmentLinks = true;
-  Scalar linkMaxShiftPx = Scalar(80);   ///< found this close to where the kept keyframe saw it
-  int linkMaxPoints = 200;              ///< KLT attempts per kept keyframe
-  int linkMinInliers = 20;
-  int linkYawSteps = 2;                 ///< guesses turned by ±1..linkYawSteps steps besides the view itself
-  Scalar linkYawStepDeg = Scalar(12);
-  int linkEveryFrames = 3;              ///< frames without a map pose searched (keyframes: each)
-  int linkEnough = 6;                   ///< links of a chain after which the search stops
-  Scalar linkAgreeDeg = Scalar(2);      ///< two links' rotations agree within this
-  // Besides those (the most recent), up to relocAnchors ANCHOR keyframes of the segment are kept:
-  // a keyframe becomes one when no anchor looks within relocAnchorDeg of its direction from within
-  // relocAnchorDepths median scene depths of its position. A head that stays in place (looking
-  // around, fast turns, working at a table) keeps a view of every direction it mapped, however
-  // long ago, for relocalisation and for the revisit search; walking, the oldest anchor goes.
-  int relocAnchors = 8;
-  Scalar relocAnchorDeg = Scalar(20);
-  Scalar relocAnchorDepths = Scalar(0.3);
-  int relocMaxPoints = 300;
-  Scalar relocMaxShiftPx = Scalar(40);
-  int relocMinInliers = 30;
-  Scalar relocMaxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
-  SlamPlaceOptions<Scalar> place;   ///< place recognition between keyframes, segments joined by it
-  // Keyframes and mapping.
-  KeyframePolicyOptions<Scalar> keyframe;  ///< when a tracked frame becomes one (keyframe_policy.hpp)
-  Scalar minTriangulationDeg = Scalar(0.6);
-  Scalar maxReprojPx = Scalar(3);
-  int windowKeyframes = 7;
-  int localIterations = 8;
-  int globalIterations = 25;
-  bool globalBundleAdjustment = true;
-  bool refineFrames = true;         ///< finish(): re-estimate every frame against the final map
-  /// finish(): full-sequence bundle adjustment of every frame over every track
-  /// (sequence_refine.hpp), tracks joined across resets and relocalisations.
-  bool sequenceRefine = true;
-  SequenceRefineOptions<Scalar> sequence;
-  /// finish(): frames without a map pose placed by the head model fitted to the posed frames
-  /// around them (head_motion.hpp), where it explains them; otherwise held / interpolated.
-  bool headModelFill = true;
-  HeadModelOptions<Scalar> headModel;
-  /// finish(): self-calibrate the shared focal (fx, fy by one factor, principal point fixed) in
-  /// the global bundle adjustment (focal_refine.hpp: profile of the BA cost over log f, a prior
-  /// toward the given focal, declined when the motion does not determine it); the per-frame
-  /// refinement then uses the refined focal. With sequenceRefine, on the sequence refinement's
-  /// problem instead (refineFocalOnSequence), which is refined again with a changed focal. Off by
-  /// default (the tracking used the given focal).
-  bool refineFocal = false;
-  FocalRefineOptions<Scalar> focal;
-  int focalMaxFrames = 60;          ///< frames of the sequence refinement's problem in the focal profile
-  /// ...taken at least this many posed frames apart: a track's errors in consecutive frames are
-  /// correlated (KLT drift), which the profile's std (independent residuals) does not know; on
-  /// every frame the std comes out ~5x too small and a right guess is moved by 2-3 %.
-  int focalFrameSpacing = 5;
-  /// ...and the std of its estimate is taken as this at least (FocalRefineOptions::minStdLog): a
-  /// guess within ~2 × this of the estimate is kept.
-  Scalar focalMinStd = Scalar(0.02);
-  /// Optional diagnostics sink (one line per event: initialisation attempts, losses, resets).
-  std::function<void(const std::string&)> log;
-
-  SlamOptions() {
-    pnp.thresholdPx = Scalar(3);
-    pnp.maxIterations = 200;
-    pnp.refinement.maxIterations = 6;
-    twoView.maxIterations = 300;
-  }
-};
 
 /// Sparse depths of one keyframe for the scale step: pixels and depths along the optical axis
 /// (map units), of the map points it observes outside the hand masks.
@@ -421,7 +184,7 @@ struct SlamResult {
   int numHeadModelFrames = 0;         ///< unposed frames placed by the head model
   bool initialised = false;           ///< a map was ever built (false: rotation-only output)
   PinholeCamera<Scalar> camera;       ///< the intrinsics of the output (refined when focal.changed)
-  bool focalAttempted = false;        ///< SlamOptions::refineFocal ran (false: off, or no map)
+  bool focalAttempted = false;        ///< SlamOptions::finish.refineFocal ran (false: off, or no map)
   FocalRefineResult<Scalar> focal;    ///< its outcome (reason says why declined / not applied)
   int count(SlamStatus s) const {
     int n = 0;
@@ -443,16 +206,7 @@ class MonoSlam {
         !std::isfinite(double(cam_.fy)) || !std::isfinite(double(cam_.cx)) || !std::isfinite(double(cam_.cy))) {
       throw Error("MonoSlam: the intrinsics must be finite with fx, fy > 0");
     }
-    if (opt_.pyramidLevels < 1 || opt_.maxFeatures < 20 || opt_.windowKeyframes < 2 || opt_.minInliers < 6 ||
-        opt_.lostFramesBeforeReset < 1 || opt_.maskDilatePx < 0 ||
-        opt_.maskBlock < 1 ||
-        !(std::abs(opt_.rollingShutter) <= Scalar(1))) {
-      throw Error("MonoSlam: invalid options");
-    }
-    opt_.init.validate();
-    opt_.turn.validate();
-    opt_.keyframe.validate();
-    opt_.place.validate();
+    opt_.validate();
     opt_.twoView.focalPx = Scalar(0.5) * (cam_.fx + cam_.fy);
     // every focal refinement's prior stays on the focal given here (or focal.priorFx)
     if (!(opt_.focal.priorFx > Scalar(0))) opt_.focal.priorFx = cam_.fx;
@@ -500,7 +254,7 @@ class MonoSlam {
     } else {
       trackPose(f);
     }
-    if (opt_.segmentLinks && !linkPyr_.empty() && !frames_.back().posed && f % std::max(1, opt_.linkEveryFrames) == 0) {
+    if (opt_.link.enabled && !linkPyr_.empty() && !frames_.back().posed && f % std::max(1, opt_.link.everyFrames) == 0) {
       searchSegmentLinks(f);
     }
     recordObservations(frames_.back());
@@ -565,7 +319,7 @@ class MonoSlam {
   struct KeyframePyramid {
     int kf = -1;
     ImagePyramid pyr;
-    bool anchor = false;  ///< relocPyr_: an anchor (SlamOptions::relocAnchors), not a recent one
+    bool anchor = false;  ///< relocPyr_: an anchor (SlamOptions::reloc.anchors), not a recent one
   };
   struct SegmentLink {
     int frame;     ///< placed in the world of the segment before its chain's break
@@ -655,14 +409,6 @@ class MonoSlam {
   void joinSegmentPairsByHead();
   bool joinAllSegmentsByHead(bool placeShort = true);
 
-  /// Map points of the recent keyframes (kfPyr_) that no live track follows and that project
-  /// into the frame under the predicted pose, off the hand mask: KLT from the keyframe's image at
-  /// the point's observation (forward-backward checked) started at the prediction; a result
-  /// within refindMaxShiftPx of it becomes a mapped track again (PnP-RANSAC then judges it). A
-  /// point covered by a hand, or out of view in a turn, and seen again keeps its place in the map
-  /// instead of being replaced by a new, unmapped corner.
-  void refindPoints(int f) { searchMapPoints(f, kfPyr_, predicted_, opt_.refindMaxShiftPx, opt_.refindMaxPoints, "re-finding"); }
-
   PinholeCamera<Scalar> cam_;
   SlamOptions<Scalar> opt_;
   int width_ = 0, height_ = 0;
@@ -677,23 +423,22 @@ class MonoSlam {
   std::vector<MapPoint> points_;
   std::vector<Keyframe> keyframes_;
   std::vector<Frame> frames_;
-  std::vector<KeyframePyramid> kfPyr_;  ///< the last refindKeyframes keyframes' pyramids
-  std::vector<KeyframePyramid> relocPyr_;  ///< relocKeyframes keyframes' pyramids, relocSpacing apart
-  std::vector<KeyframePyramid> linkPyr_;   ///< the last segment's, after a broken rotation chain (segmentLinks)
-  KeyframePyramid lastKfPyr_;              ///< the last keyframe's (segmentLinks; kf −1: none)
+  std::vector<KeyframePyramid> relocPyr_;  ///< reloc.keyframes keyframes' pyramids, reloc.spacing apart
+  std::vector<KeyframePyramid> linkPyr_;   ///< the last segment's, after a broken rotation chain (link.enabled)
+  KeyframePyramid lastKfPyr_;              ///< the last keyframe's (link.enabled; kf −1: none)
   std::vector<int> trackPoint_;  ///< track id → map point (−1: none), for finish()
   std::vector<Vec3<Scalar>> seqPoints_;  ///< finish(): the sequence refinement's points (world)
   std::vector<std::vector<std::pair<int, Vec2<Scalar>>>> seqPointObs_;  ///< and their (frame, pixel) observations
   std::vector<int> trackAlias_;  ///< track id → the id the same track had before a reset (−1: none; may be short)
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
-  std::vector<SegmentLink> links_;  ///< SlamOptions::segmentLinks
+  std::vector<SegmentLink> links_;  ///< SlamOptions::link.enabled
   BinaryDescriptorExtractor describer_;  ///< SlamOptions::place
   PlaceIndex placeIndex_;
   std::vector<PlaceLink> placeLinks_;
   int placedSegments_ = 0;
   int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0, revisitPoints_ = 0, refinedFrames_ = 0, headModelFrames_ = 0;
-  /// Frame ranges [a, b) of the segments placed by the head model (headModelPlaceShort): their
+  /// Frame ranges [a, b) of the segments placed by the head model (join.placeShort): their
   /// keyframe depths and points are in a scale of their own and are left out of the result.
   std::vector<std::pair<int, int>> placedRanges_;
   bool placedFrame(int f) const {

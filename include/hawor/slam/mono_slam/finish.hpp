@@ -52,7 +52,7 @@ void MonoSlam<Scalar>::refineAllFrames() {
   }
 }
 
-/// SlamOptions::sequenceRefine: every frame's observations, with the tracks that are one
+/// SlamOptions::finish.sequenceRefine: every frame's observations, with the tracks that are one
 /// physical point joined (a track renamed at a reset, tracks that follow the same map point),
 /// adjusted together (sequence_refine.hpp). Frames it adjusts are posed from it; the others are
 /// left to fillUnposed. False when it found nothing to adjust.
@@ -145,9 +145,9 @@ bool MonoSlam<Scalar>::refineWholeSequence() {
   return true;
 }
 
-/// SlamOptions::refineFocal with the sequence refinement: the focal profile (focal_refine.hpp)
-/// on a bundle-adjustment problem of the refined points and at most focalMaxFrames of the
-/// adjusted frames (evenly spaced, focalFrameSpacing apart at least; each profile step is one
+/// SlamOptions::finish.refineFocal with the sequence refinement: the focal profile (focal_refine.hpp)
+/// on a bundle-adjustment problem of the refined points and at most finish.focalMaxFrames of the
+/// adjusted frames (evenly spaced, finish.focalFrameSpacing apart at least; each profile step is one
 /// adjustment). True when the focal
 /// changed (the caller refines the sequence again with it).
 template <typename Scalar>
@@ -164,8 +164,8 @@ bool MonoSlam<Scalar>::refineFocalOnSequence() {
     focal_.reason = "too few posed frames for the focal";
     return false;
   }
-  const std::size_t step = std::max<std::size_t>(static_cast<std::size_t>(std::max(1, opt_.focalFrameSpacing)),
-                                                 (posedFrames.size() + opt_.focalMaxFrames - 1) / static_cast<std::size_t>(std::max(1, opt_.focalMaxFrames)));
+  const std::size_t step = std::max<std::size_t>(static_cast<std::size_t>(std::max(1, opt_.finish.focalFrameSpacing)),
+                                                 (posedFrames.size() + opt_.finish.focalMaxFrames - 1) / static_cast<std::size_t>(std::max(1, opt_.finish.focalMaxFrames)));
   BAProblem<Scalar> P;
   P.camera = cam_;
   std::vector<int> poseOf(frames_.size(), -1);
@@ -180,7 +180,7 @@ bool MonoSlam<Scalar>::refineFocalOnSequence() {
   P.poseFixed[0] = 1;
   addFarthestScalePrior(P, 0);
   FocalRefineOptions<Scalar> fo = opt_.focal;
-  fo.minStdLog = std::max(fo.minStdLog, opt_.focalMinStd);
+  fo.minStdLog = std::max(fo.minStdLog, opt_.finish.focalMinStd);
   fo.ba = mapBAOptions(opt_.globalIterations);
   focal_ = refineFocal(P, fo);
   if (opt_.log) {
@@ -259,7 +259,6 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   // memory.
   prevPyr_ = ImagePyramid();
   curPyr_ = ImagePyramid();
-  std::vector<KeyframePyramid>().swap(kfPyr_);
   std::vector<KeyframePyramid>().swap(relocPyr_);
   std::vector<KeyframePyramid>().swap(linkPyr_);
   lastKfPyr_ = KeyframePyramid();
@@ -268,26 +267,26 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   SlamResult<Scalar> res;
   const int n = static_cast<int>(frames_.size());
   if (n == 0) return res;
-  if (opt_.segmentLinks && resets_ > 0) applySegmentLinks();
-  if (opt_.headModelJoin && resets_ > 0) joinSegmentPairsByHead();
-  if (opt_.globalBundleAdjustment && keyframes_.size() >= 2) {
+  if (opt_.link.enabled && resets_ > 0) applySegmentLinks();
+  if (opt_.join.headModel && resets_ > 0) joinSegmentPairsByHead();
+  if (opt_.finish.globalBundleAdjustment && keyframes_.size() >= 2) {
     std::vector<int> all(keyframes_.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
     // With the sequence refinement on, the focal is refined on its problem instead (every
     // frame's tracks, far more of the motion that determines the focal than the keyframes').
-    adjust(all, opt_.globalIterations, true, opt_.refineFocal && !opt_.sequenceRefine);
+    adjust(all, opt_.globalIterations, true, opt_.finish.refineFocal && !opt_.finish.sequenceRefine);
     for (std::size_t k = 0; k < keyframes_.size(); ++k) frames_[static_cast<std::size_t>(keyframes_[k].frame)].T = keyframes_[k].T;
   }
-  if (opt_.refineFrames && !points_.empty()) refineAllFrames();
+  if (opt_.finish.refineFrames && !points_.empty()) refineAllFrames();
   fillUnposed();
-  if (opt_.sequenceRefine && opt_.headModelJoin && opt_.headModelJoinAll && opt_.headModelJoinBeforeRefine && resets_ > 0) {
+  if (opt_.finish.sequenceRefine && opt_.join.headModel && opt_.join.headModelAll && opt_.join.beforeRefine && resets_ > 0) {
     joinAllSegmentsByHead(false);
   }
   if (opt_.place.enabled && resets_ > 0) placedSegments_ = placeSegmentsByLinks();
-  bool sequenceDone = opt_.sequenceRefine && everInitialised_ && refineWholeSequence();
+  bool sequenceDone = opt_.finish.sequenceRefine && everInitialised_ && refineWholeSequence();
   // The refinement's points and inliers were chosen at the old focal: repeat while it moves
   // (at most 3 times); the result reports the first guess and the last estimate.
-  if (sequenceDone && opt_.refineFocal) {
+  if (sequenceDone && opt_.finish.refineFocal) {
     const Scalar guess = cam_.fx;
     bool changed = false;
     for (int round = 0; sequenceDone && round < 3 && refineFocalOnSequence(); ++round) {
@@ -305,8 +304,8 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
       focal_.fy = cam_.fy;
     }
   }
-  if (opt_.headModelJoin && opt_.headModelJoinAll && resets_ > 0) joinAllSegmentsByHead();
-  if (opt_.headModelFill && everInitialised_) {
+  if (opt_.join.headModel && opt_.join.headModelAll && resets_ > 0) joinAllSegmentsByHead();
+  if (opt_.finish.headModelFill && everInitialised_) {
     std::vector<SE3T> T(static_cast<std::size_t>(n));
     std::vector<char> posed(static_cast<std::size_t>(n)), rot(static_cast<std::size_t>(n));
     std::string headLog;
@@ -396,7 +395,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   if (!focalAttempted_) {
     res.focal.guessFx = res.focal.fx = cam_.fx;
     res.focal.fy = cam_.fy;
-    res.focal.reason = opt_.refineFocal ? "no map for the global bundle adjustment" : "off";
+    res.focal.reason = opt_.finish.refineFocal ? "no map for the global bundle adjustment" : "off";
   }
   return res;
 }

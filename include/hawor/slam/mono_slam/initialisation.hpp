@@ -156,9 +156,9 @@ void MonoSlam<Scalar>::buildMap(int f, const TwoViewResult<Scalar>& tv, const st
   // depth of the last map, docs/design.md §5).
   Scalar s = Scalar(1);
   // A new segment: the old map is no longer the one tracked. Its kept images stay for the
-  // place recognition when the rotation chain to it is broken (segmentLinks; else the images
+  // place recognition when the rotation chain to it is broken (link.enabled; else the images
   // kept from an earlier break stay, for the same chain).
-  if (opt_.segmentLinks && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
+  if (opt_.link.enabled && !keyframes_.empty() && chainStart(f) > keyframes_.back().frame) {
     linkPyr_.swap(relocPyr_);
     // The segment's last keyframe too: a break comes in a turn, and the head often turns back.
     if (lastKfPyr_.kf >= 0 && std::none_of(linkPyr_.begin(), linkPyr_.end(), [&](const KeyframePyramid& e) { return e.kf == lastKfPyr_.kf; })) {

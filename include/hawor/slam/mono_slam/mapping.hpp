@@ -26,21 +26,21 @@ void MonoSlam<Scalar>::keepPyramid(std::vector<KeyframePyramid>& store, int capa
 }
 
 /// relocPyr_: keyframe k joins as an anchor when no anchor of the segment looks within
-/// relocAnchorDeg of its direction from within relocAnchorDepths median scene depths, else as
+/// reloc.anchorDeg of its direction from within reloc.anchorDepths median scene depths, else as
 /// a recent one; each kind drops its oldest beyond its capacity (keepPyramid).
 template <typename Scalar>
 void MonoSlam<Scalar>::keepRelocPyramid(int k) {
   const Keyframe& kk = keyframes_[static_cast<std::size_t>(k)];
   const V3 z = kk.T.rotationMatrix().col(2);
-  const Scalar cosMax = std::cos(opt_.relocAnchorDeg * Constants<Scalar>::pi() / Scalar(180));
-  const Scalar maxDist = opt_.relocAnchorDepths * lastMedianDepth_;
-  const bool anchor = opt_.relocAnchors > 0 && lastMedianDepth_ > Scalar(0) &&
+  const Scalar cosMax = std::cos(opt_.reloc.anchorDeg * Constants<Scalar>::pi() / Scalar(180));
+  const Scalar maxDist = opt_.reloc.anchorDepths * lastMedianDepth_;
+  const bool anchor = opt_.reloc.anchors > 0 && lastMedianDepth_ > Scalar(0) &&
                       std::none_of(relocPyr_.begin(), relocPyr_.end(), [&](const KeyframePyramid& e) {
                         const Keyframe& ka = keyframes_[static_cast<std::size_t>(e.kf)];
                         return e.anchor && ka.segment == kk.segment && V3(ka.T.rotationMatrix().col(2)).dot(z) >= cosMax &&
                                (ka.T.translation() - kk.T.translation()).norm() <= maxDist;
                       });
-  keepPyramid(relocPyr_, anchor ? opt_.relocAnchors : opt_.relocKeyframes, k, anchor);
+  keepPyramid(relocPyr_, anchor ? opt_.reloc.anchors : opt_.reloc.keyframes, k, anchor);
 }
 
 /// After a keyframe's points are in: sliding-window bundle adjustment, the frame takes the
@@ -51,15 +51,14 @@ void MonoSlam<Scalar>::closeKeyframe(Frame& fr) {
   adjust(lastWindow(), opt_.localIterations, false);
   fr.T = keyframes_.back().T;
   const bool current = keyframes_.back().frame == static_cast<int>(frames_.size()) - 1;
-  // The current frame's pyramid, for re-finding this keyframe's points later.
-  if (opt_.refindKeyframes > 0 && current) keepPyramid(kfPyr_, opt_.refindKeyframes, k);
-  if (opt_.segmentLinks && current) {
+  // The current frame's pyramid, for finding this keyframe's points again later.
+  if (opt_.link.enabled && current) {
     lastKfPyr_.kf = k;
     lastKfPyr_.pyr.levels = curPyr_.levels;  // (buffers reused)
   }
-  if (opt_.relocalise && opt_.relocKeyframes > 0 && current &&
+  if (opt_.reloc.enabled && opt_.reloc.keyframes > 0 && current &&
       (relocPyr_.empty() ||
-       keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.relocSpacing)) {
+       keyframes_.back().frame - keyframes_[static_cast<std::size_t>(relocPyr_.back().kf)].frame >= opt_.reloc.spacing)) {
     keepRelocPyramid(k);
   }
   if (opt_.place.enabled && current) describeAndLinkKeyframe(k);
@@ -74,8 +73,8 @@ void MonoSlam<Scalar>::closeKeyframe(Frame& fr) {
 
 template <typename Scalar>
 void MonoSlam<Scalar>::insertKeyframe(int f) {
-  if (opt_.revisitSearch && opt_.relocalise) searchRevisits(f);
-  if (opt_.segmentLinks) searchSegmentLinks(f);
+  if (opt_.revisit.enabled && opt_.reloc.enabled) searchRevisits(f);
+  if (opt_.link.enabled) searchSegmentLinks(f);
   Frame& fr = frames_.back();
   const int k = static_cast<int>(keyframes_.size());
   keyframes_.push_back(Keyframe{f, fr.T, hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask(), {}, segment_, {}, {}, {}});

@@ -8,14 +8,14 @@
 
 namespace hawor {
 
-/// SlamOptions::relocalise: the points of the kept keyframes searched under the frame's guess
+/// SlamOptions::reloc.enabled: the points of the kept keyframes searched under the frame's guess
 /// (frames_.back().T: rotation from the rays, position held), then PnP-RANSAC on every mapped
 /// track. Success: the frame is Relocalised in the old segment (a reset without a new map is
 /// undone) and becomes a keyframe. Failure: the tracks the search added are dropped again.
 template <typename Scalar>
 bool MonoSlam<Scalar>::relocalise(int f) {
   Frame& fr = frames_.back();
-  if (!opt_.relocalise || relocPyr_.empty()) return false;
+  if (!opt_.reloc.enabled || relocPyr_.empty()) return false;
   // The guess's rotation is the rays' when the ray chain is unbroken since the last posed frame;
   // otherwise (every track died: a hand over the lens, a black frame) it is only held.
   bool chain = true;
@@ -23,31 +23,31 @@ bool MonoSlam<Scalar>::relocalise(int f) {
     chain = frames_[static_cast<std::size_t>(g)].rotationKnown;
   }
   const std::size_t before = tracks_.size();
-  searchMapPoints(f, relocPyr_, fr.T, opt_.relocMaxShiftPx, opt_.relocMaxPoints, "relocalisation");
+  searchMapPoints(f, relocPyr_, fr.T, opt_.reloc.maxShiftPx, opt_.reloc.maxPoints, "relocalisation");
   std::vector<V3> X;
   std::vector<V2> uv;
   std::vector<int> ti;
   mappedTracks(X, uv, ti);
   bool ok = false;
   PnPRansacResult<Scalar> r;
-  if (static_cast<int>(X.size()) >= opt_.relocMinInliers) {
+  if (static_cast<int>(X.size()) >= opt_.reloc.minInliers) {
     PnPRansacOptions<Scalar> po = opt_.pnp;
     po.seed = opt_.pnp.seed + 0x5bd1e995u + static_cast<std::uint32_t>(f);
-    po.minInliers = opt_.relocMinInliers;
+    po.minInliers = opt_.reloc.minInliers;
     r = solvePnPRansac(X, uv, cam_, po);
     // The rays' rotation is near-exact over a short loss: a pose that disagrees with it is a
     // wrong match set (measured: right ones agree within 0.42°, wrong ones are 1-10° off).
     // Without the chain, or when the chain disagrees (its rotation drifts in a fast turn: the
     // rays' pure-rotation fit absorbs the neck's translation, up to 1° a frame), two consecutive
     // relocalisations must agree with the rays' rotation between them instead.
-    ok = r.ok() && r.numInliers >= opt_.relocMinInliers;
-    if (ok && chain && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.relocMaxRotationDeg) {
+    ok = r.ok() && r.numInliers >= opt_.reloc.minInliers;
+    if (ok && chain && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.reloc.maxRotationDeg) {
       ok = true;
     } else if (ok) {
       const SE3T& prevGuess = frames_[static_cast<std::size_t>(f - 1)].T;
       const bool agree = relocCandidateFrame_ == f - 1 && fr.rotationKnown &&
                          rotationAngleDeg(SE3T(relocCandidate_.inverse() * r.T_w_c), SE3T(prevGuess.inverse() * fr.T)) <=
-                             opt_.relocMaxRotationDeg;
+                             opt_.reloc.maxRotationDeg;
       relocCandidateFrame_ = f;
       relocCandidate_ = r.T_w_c;
       ok = agree;
@@ -86,9 +86,10 @@ bool MonoSlam<Scalar>::relocalise(int f) {
   return true;
 }
 
-/// The search of refindPoints over the keyframe pyramids `store` (newest first), the points
-/// projected under `pose`, accepted within maxShiftPx of their projection; the found points
-/// become mapped tracks.
+/// Map points of the keyframe pyramids `store` (newest first) that no live track follows,
+/// projected under `pose` and searched by KLT from the keyframe's image (forward-backward
+/// checked), accepted within maxShiftPx of their projection; the found points become mapped
+/// tracks.
 template <typename Scalar>
 void MonoSlam<Scalar>::searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose,
     Scalar maxShiftPx, int maxPoints, const char* what, const std::vector<char>* use) {
@@ -163,11 +164,11 @@ void MonoSlam<Scalar>::searchMapPoints(int f, const std::vector<KeyframePyramid>
   }
 }
 
-/// SlamOptions::revisitSearch: the head looks back at a place it mapped a while ago (a standing
+/// SlamOptions::revisit.enabled: the head looks back at a place it mapped a while ago (a standing
 /// person looking around, a table worked at for minutes). The points of the kept keyframes of
-/// this segment at least revisitMinFrames old whose view is within revisitMaxAngleDeg of the
+/// this segment at least revisit.minFrames old whose view is within revisit.maxAngleDeg of the
 /// current one are searched under the current pose (searchMapPoints); when PnP-RANSAC on the
-/// found points alone has revisitMinInliers inliers and a rotation within revisitMaxRotationDeg
+/// found points alone has revisit.minInliers inliers and a rotation within revisit.maxRotationDeg
 /// of the tracked pose, its inliers become tracks of those old points. The keyframe then
 /// observes them: the bundle adjustments tie the current map to the old one (with the old
 /// keyframes fixed in the local window) instead of letting the scale drift turn after turn.
@@ -176,29 +177,29 @@ void MonoSlam<Scalar>::searchRevisits(int f) {
   const Frame& fr = frames_.back();
   std::vector<char> use(relocPyr_.size(), 0);
   const V3 z = fr.T.rotationMatrix().col(2);
-  const Scalar cosMax = std::cos(opt_.revisitMaxAngleDeg * Constants<Scalar>::pi() / Scalar(180));
+  const Scalar cosMax = std::cos(opt_.revisit.maxAngleDeg * Constants<Scalar>::pi() / Scalar(180));
   int any = 0;
   for (std::size_t i = 0; i < relocPyr_.size(); ++i) {
     const Keyframe& kf = keyframes_[static_cast<std::size_t>(relocPyr_[i].kf)];
-    if (kf.segment != segment_ || f - kf.frame < opt_.revisitMinFrames) continue;
+    if (kf.segment != segment_ || f - kf.frame < opt_.revisit.minFrames) continue;
     if (V3(kf.T.rotationMatrix().col(2)).dot(z) < cosMax) continue;
     use[i] = 1;
     ++any;
   }
   if (!any) return;
   const std::size_t before = tracks_.size();
-  searchMapPoints(f, relocPyr_, fr.T, opt_.revisitMaxShiftPx, opt_.revisitMaxPoints, "revisit", &use);
+  searchMapPoints(f, relocPyr_, fr.T, opt_.revisit.maxShiftPx, opt_.revisit.maxPoints, "revisit", &use);
   std::vector<V3> X;
   std::vector<V2> uv;
   foundCorrespondences(before, X, uv);
   bool ok = false;
   PnPRansacResult<Scalar> r;
-  if (static_cast<int>(X.size()) >= opt_.revisitMinInliers) {
+  if (static_cast<int>(X.size()) >= opt_.revisit.minInliers) {
     PnPRansacOptions<Scalar> po = opt_.pnp;
     po.seed = opt_.pnp.seed + 0x2545f491u + static_cast<std::uint32_t>(f);
-    po.minInliers = opt_.revisitMinInliers;
+    po.minInliers = opt_.revisit.minInliers;
     r = solvePnPRansac(X, uv, cam_, po);
-    ok = r.ok() && r.numInliers >= opt_.revisitMinInliers && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.revisitMaxRotationDeg;
+    ok = r.ok() && r.numInliers >= opt_.revisit.minInliers && rotationAngleDeg(fr.T, r.T_w_c) <= opt_.revisit.maxRotationDeg;
   }
   std::vector<char> drop(tracks_.size(), 0);
   int kept = 0;
@@ -237,10 +238,10 @@ int MonoSlam<Scalar>::chainStart(int f) const {
   return 0;
 }
 
-/// SlamOptions::segmentLinks: frame f (a keyframe, or every linkEveryFrames-th frame without a
+/// SlamOptions::link.enabled: frame f (a keyframe, or every link.everyFrames-th frame without a
 /// map pose) whose rotation chain starts after the kept images of the segment before the break
 /// (linkPyr_): each image is tried as the current view (its points searched by KLT around where
-/// it saw them), and a PnP pose in that segment's world with linkMinInliers inliers is kept as
+/// it saw them), and a PnP pose in that segment's world with link.minInliers inliers is kept as
 /// a link. Its tracks are not kept: the worlds differ.
 template <typename Scalar>
 void MonoSlam<Scalar>::searchSegmentLinks(int f) {
@@ -248,7 +249,7 @@ void MonoSlam<Scalar>::searchSegmentLinks(int f) {
   const int start = chainStart(f);
   int linked = 0;
   for (const SegmentLink& l : links_) linked += l.frame >= start ? 1 : 0;
-  if (linked >= opt_.linkEnough) {  // enough to agree on: the images go
+  if (linked >= opt_.link.enough) {  // enough to agree on: the images go
     std::vector<KeyframePyramid>().swap(linkPyr_);
     return;
   }
@@ -256,28 +257,28 @@ void MonoSlam<Scalar>::searchSegmentLinks(int f) {
     const Keyframe& kk = keyframes_[static_cast<std::size_t>(linkPyr_[i].kf)];
     std::vector<char> use(linkPyr_.size(), 0);
     use[i] = 1;
-    // The guesses: the kept keyframe's own view, then turned by ±linkYawStepDeg, ±2·… about
+    // The guesses: the kept keyframe's own view, then turned by ±link.yawStepDeg, ±2·… about
     // its camera's vertical axis (a head turns mostly about it; KLT reaches about 8° from a
     // guess at 640×480).
     PnPRansacResult<Scalar> r;
     std::size_t found = 0;
     bool ok = false;
-    for (int h = 0; h <= 2 * opt_.linkYawSteps && !ok; ++h) {
-      const Scalar yaw = Scalar((h + 1) / 2 * (h % 2 == 1 ? 1 : -1)) * opt_.linkYawStepDeg * Constants<Scalar>::pi() / Scalar(180);
+    for (int h = 0; h <= 2 * opt_.link.yawSteps && !ok; ++h) {
+      const Scalar yaw = Scalar((h + 1) / 2 * (h % 2 == 1 ? 1 : -1)) * opt_.link.yawStepDeg * Constants<Scalar>::pi() / Scalar(180);
       const SE3T guess = kk.T * SE3T(SO3<Scalar>::exp(V3(Scalar(0), yaw, Scalar(0))), V3::Zero());
       const std::size_t before = tracks_.size();
-      searchMapPoints(f, linkPyr_, guess, opt_.linkMaxShiftPx, opt_.linkMaxPoints, "segment link", &use);
+      searchMapPoints(f, linkPyr_, guess, opt_.link.maxShiftPx, opt_.link.maxPoints, "segment link", &use);
       std::vector<V3> X;
       std::vector<V2> uv;
       foundCorrespondences(before, X, uv);
       removeTracksFrom(before);
       found = std::max(found, X.size());
-      if (static_cast<int>(X.size()) < opt_.linkMinInliers) continue;
+      if (static_cast<int>(X.size()) < opt_.link.minInliers) continue;
       PnPRansacOptions<Scalar> po = opt_.pnp;
       po.seed = opt_.pnp.seed + 0x68e31da4u + static_cast<std::uint32_t>(f);
-      po.minInliers = opt_.linkMinInliers;
+      po.minInliers = opt_.link.minInliers;
       r = solvePnPRansac(X, uv, cam_, po);
-      ok = r.ok() && r.numInliers >= opt_.linkMinInliers;
+      ok = r.ok() && r.numInliers >= opt_.link.minInliers;
     }
     if (opt_.log) {
       opt_.log("frame " + std::to_string(f) + ": segment link to keyframe " + std::to_string(linkPyr_[i].kf) + " (frame " +
@@ -290,7 +291,7 @@ void MonoSlam<Scalar>::searchSegmentLinks(int f) {
   }
 }
 
-/// SlamOptions::segmentLinks: the first frame that link l's correction applies to. After the
+/// SlamOptions::link.enabled: the first frame that link l's correction applies to. After the
 /// last frame without a rotation between its kept image and it; when there is none (only
 /// rotations carried on: coastRotation), after the first run of carried-on frames.
 template <typename Scalar>
@@ -304,17 +305,17 @@ int MonoSlam<Scalar>::linkChainStart(const SegmentLink& l) const {
   return g;
 }
 
-/// SlamOptions::segmentLinks, in finish() before the joins. The links are grouped by the frame
+/// SlamOptions::link.enabled, in finish() before the joins. The links are grouped by the frame
 /// their correction starts at (linkChainStart); for each group, in order, the corrections
 /// C = R_old(f)·R(f)ᵀ (R_old with the corrections already made to the older frames) must
-/// agree, two at different frames within linkAgreeDeg; the best-supported one (then the most
+/// agree, two at different frames within link.agreeDeg; the best-supported one (then the most
 /// inliers) rotates the frames from the start on (keyframes and points with them) about the
 /// start frame's position. The joins then place and scale the segments.
 template <typename Scalar>
 void MonoSlam<Scalar>::applySegmentLinks() {
   if (links_.empty()) return;
   const int n = static_cast<int>(frames_.size());
-  const Scalar agreeRad = opt_.linkAgreeDeg * Constants<Scalar>::pi() / Scalar(180);
+  const Scalar agreeRad = opt_.link.agreeDeg * Constants<Scalar>::pi() / Scalar(180);
   std::vector<int> starts(links_.size());
   for (std::size_t i = 0; i < links_.size(); ++i) starts[i] = linkChainStart(links_[i]);
   std::vector<int> order = starts;

@@ -38,7 +38,7 @@ std::vector<int> MonoSlam<Scalar>::segmentFirstKeyframes() const {
   return first;
 }
 
-/// SlamOptions::headModelJoin: each later segment joined to the one before it by one head model
+/// SlamOptions::join.headModel: each later segment joined to the one before it by one head model
 /// fitted to the posed frames on both sides of the reset (head_motion.hpp fitHeadJoin: B's
 /// positions into A's units, scale and offset), where the model explains them; everything after
 /// it moves with it (later segments continue its scale); frames before its first keyframe (lost,
@@ -80,11 +80,11 @@ void MonoSlam<Scalar>::joinSegmentPairsByHead() {
   }
 }
 
-/// SlamOptions::headModelJoinAll: the segments (first keyframes segFirstKf; segment i spans
+/// SlamOptions::join.headModelAll: the segments (first keyframes segFirstKf; segment i spans
 /// the frames from its first keyframe to the next one's) with enough posed frames and turn
 /// joined by one head model (fitHeadJoinAll, the longest segment the reference). True when it
 /// passed the tests and was applied; a segment left out moves with the one before it, and with
-/// placeShort (SlamOptions::headModelPlaceShort also on) its frames are placed by the model.
+/// placeShort (SlamOptions::join.placeShort also on) its frames are placed by the model.
 template <typename Scalar>
 bool MonoSlam<Scalar>::joinAllSegmentsByHead(bool placeShort) {
   const std::vector<int> segFirstKf = segmentFirstKeyframes();
@@ -125,7 +125,7 @@ bool MonoSlam<Scalar>::joinAllSegmentsByHead(bool placeShort) {
   }
   // A segment too short to fix its own scale: its frames are placed by the head model instead
   // (fillGapsByHeadModel), like lost ones.
-  if (opt_.headModelPlaceShort && placeShort) {
+  if (opt_.join.placeShort && placeShort) {
     for (std::size_t i = 0; i < S; ++i) {
       if (groupOf[i] >= 0) continue;
       placedRanges_.emplace_back(first[i], first[i + 1]);

@@ -48,7 +48,6 @@ int MonoSlam<Scalar>::countMapped() const {
 template <typename Scalar>
 void MonoSlam<Scalar>::trackPose(int f) {
   Frame& fr = frames_.back();
-  if (opt_.refindKeyframes > 0 && countMapped() < opt_.refindBelow) refindPoints(f);
   std::vector<V3> X;
   std::vector<V2> uv;
   std::vector<int> ti;
@@ -139,7 +138,6 @@ void MonoSlam<Scalar>::trackPose(int f) {
       trackAlias_.resize(trackPoint_.size(), -1);
       trackAlias_.back() = oldId;
     }
-    kfPyr_.clear();
     setReference(f);
   }
 }
