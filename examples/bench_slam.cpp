@@ -58,6 +58,7 @@ struct RunStats {
   double ateM = 0, atePct = 0, pathM = 0, msMedian = 0, msP95 = 0, finishMs = 0;
   double rotMeanDeg = 0, rotMaxDeg = 0;  // camera rotation error after the best global rotation
   int keyframes = 0, losses = 0, resets = 0, tracked = 0, interpolated = 0, lost = 0, relocalised = 0;
+  int placeLinks = 0, placedSegments = 0;  // place recognition: links verified, segments placed by them
   double mb = 0;
   double coverage30 = 0, maxCoverage = 0;
 };
@@ -139,8 +140,8 @@ int main(int argc, char** argv) {
       }
     }
     std::vector<RunStats> all;
-    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %7s %7s %5s %5s %5s %22s %6s %6s %7s\n", "preset", "mode", "frames", "ATE[m]",
-                "ATE[%]", "path[m]", "rot_deg", "rot_max", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "MB", "hand30", "fin_ms");
+    std::printf("%-14s %-8s %6s %9s %7s %8s %7s %7s %7s %7s %5s %5s %5s %22s %5s %6s %6s %7s\n", "preset", "mode", "frames", "ATE[m]",
+                "ATE[%]", "path[m]", "rot_deg", "rot_max", "ms_med", "ms_p95", "KF", "loss", "reset", "trk/int/lost/reloc", "links", "MB", "hand30", "fin_ms");
     for (const std::string& name : presets) {
       hawor::synth::SynthOptions so;
       so.width = width;
@@ -237,14 +238,16 @@ int main(int argc, char** argv) {
         st.interpolated = r.count(hawor::SlamStatus::Interpolated);
         st.lost = r.count(hawor::SlamStatus::Lost);
         st.relocalised = r.count(hawor::SlamStatus::Relocalised);
+        st.placeLinks = r.numPlaceLinks;
+        st.placedSegments = r.numPlacedSegments;
         st.mb = bytes / (1024.0 * 1024.0);
         st.coverage30 = double(cov30) / n;
         st.maxCoverage = maxCov;
         char counts[64];
         std::snprintf(counts, sizeof counts, "%d/%d/%d/%d", st.tracked, st.interpolated, st.lost, st.relocalised);
-        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.1f %7.2f %7.2f %5d %5d %5d %22s %6.1f %6.2f %7.0f\n", name.c_str(),
+        std::printf("%-14s %-8s %6d %9.4f %7.3f %8.3f %7.2f %7.1f %7.2f %7.2f %5d %5d %5d %22s %5d %6.1f %6.2f %7.0f\n", name.c_str(),
                     st.mode.c_str(), n, st.ateM, st.atePct, path, st.rotMeanDeg, st.rotMaxDeg, st.msMedian, st.msP95, st.keyframes, st.losses,
-                    st.resets, counts, st.mb, st.coverage30, st.finishMs);
+                    st.resets, counts, st.placeLinks, st.mb, st.coverage30, st.finishMs);
         std::fflush(stdout);
         all.push_back(st);
       }
@@ -263,7 +266,8 @@ int main(int argc, char** argv) {
           << ", \"ms_median\": " << s.msMedian << ", \"ms_p95\": " << s.msP95 << ", \"finish_ms\": " << s.finishMs
           << ", \"keyframes\": " << s.keyframes << ", \"losses\": " << s.losses << ", \"resets\": " << s.resets
           << ", \"tracked\": " << s.tracked << ", \"interpolated\": " << s.interpolated << ", \"lost\": " << s.lost
-          << ", \"relocalised\": " << s.relocalised << ", \"sequence_mb\": " << s.mb
+          << ", \"relocalised\": " << s.relocalised << ", \"place_links\": " << s.placeLinks
+          << ", \"placed_segments\": " << s.placedSegments << ", \"sequence_mb\": " << s.mb
           << ", \"hand_coverage_ge30_fraction\": " << s.coverage30 << ", \"max_hand_coverage\": " << s.maxCoverage << "}"
           << (i + 1 < all.size() ? ",\n" : "\n");
       }

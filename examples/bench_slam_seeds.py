@@ -15,6 +15,7 @@ figures are read over seeds. This script runs `bench_slam --seed N --json F` for
     ratios;
   - per preset, the median over seeds of the camera rotation error (degrees, each run's mean over
     frames after the best global rotation) and the worst frame of any run;
+  - per preset and seed, the place links verified and the frames not posed (masked);
   - median and p95 of the per-run median ms per frame, and the largest stored sequence (MB);
   - one line per number of the issue, with the value it was judged on.
 
@@ -176,6 +177,14 @@ def main(argv):
                                            "mean_of_ratios": mean_ratio}
         print("masked / unmasked ATE over %s (hands >= 30 %% of the image on >= 10 %% of frames): ratio of the "
               "means %.2f, mean of the per-seed ratios %.2f" % (",".join(covered), ratio_means, mean_ratio))
+    # Long sequences that revisit places (--frames 3000: walk laps the table, table_work stays at
+    # it): the place links MonoSlam verified and the frames it could not pose, per seed (masked).
+    print("masked runs per seed: place links / frames lost or interpolated")
+    for p in presets:
+        row = runs.get((p, "masked"), {})
+        cells = ["%s / %s" % (row[s].get("place_links", "-"), row[s]["lost"] + row[s]["interpolated"])
+                 if s in row else "-" for s in done]
+        print("%-14s " % p + "  ".join("%12s" % c for c in cells))
     ms = [r["ms_median"] for v in runs.values() for r in v.values()]
     mb = max(r["sequence_mb"] for v in runs.values() for r in v.values())
     summary["ms_per_frame"] = {"median_of_run_medians": median(ms), "p95_of_run_medians": float(np.percentile(ms, 95))}

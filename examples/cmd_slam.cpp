@@ -249,6 +249,12 @@ int cmdSlam(int argc, char** argv) {
     z.set("depth", hawor::NpyArray::fromVector(depth));
     z.write(args.required("keyframe-depths"));
   }
+  std::string links = "[";  // [frame, older frame, matched points] per place link
+  for (const auto& l : r.placeLinks) {
+    links += (links.size() > 1 ? ", [" : "[") + std::to_string(l.frame) + ", " + std::to_string(l.oldFrame) + ", " +
+             std::to_string(l.points) + "]";
+  }
+  links += "]";
   JsonObject j;
   j.integer("frames", static_cast<long long>(r.poses.size()))
       .integer("keyframes", r.numKeyframes)
@@ -261,6 +267,7 @@ int cmdSlam(int argc, char** argv) {
       .integer("relocalisations", r.numRelocalisations)
       .integer("revisit_points", r.numRevisitPoints)
       .integer("place_links", r.numPlaceLinks)
+      .raw("place_link_frames", links)
       .integer("placed_segments", r.numPlacedSegments)
       .integer("refined_frames", r.numRefinedFrames)
       .integer("head_model_frames", r.numHeadModelFrames)

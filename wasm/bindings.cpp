@@ -22,7 +22,8 @@
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
 //       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
 //       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
-//       numResets, numRelocalisations, numRevisitPoints, numPlaceLinks, numPlacedSegments,
+//       numResets, numRelocalisations, numRevisitPoints, numPlaceLinks, placeLinks (Int32Array:
+//       frame, older frame, matched points per link), numPlacedSegments,
 //       numRefinedFrames, numHeadModelFrames, initialised, focal: {attempted, accepted, changed, guessFx,
 //       fx, fy (the output's), estimateFx, stdLog (posterior std of log f), dataStdLog, rmsGuessPx, rmsPx,
 //       evaluations, reason}}
@@ -399,6 +400,9 @@ class MonoSlam {
       o.set("numRelocalisations", r.numRelocalisations);
       o.set("numRevisitPoints", r.numRevisitPoints);
       o.set("numPlaceLinks", r.numPlaceLinks);
+      std::vector<int> links;  // frame, older frame, matched points per place link
+      for (const auto& l : r.placeLinks) links.insert(links.end(), {l.frame, l.oldFrame, l.points});
+      o.set("placeLinks", toTyped(links.data(), links.size(), "Int32Array"));
       o.set("numPlacedSegments", r.numPlacedSegments);
       o.set("numRefinedFrames", r.numRefinedFrames);
       o.set("numHeadModelFrames", r.numHeadModelFrames);

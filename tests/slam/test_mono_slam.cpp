@@ -232,6 +232,41 @@ TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the
   CHECK(ate < 0.03 * r.path);
 }
 
+TEST_CASE("MonoSlam: place recognition links the segment after a loss to the old map and places it there", "[slam][system]") {
+  // The loss above without relocalisation: a second map segment starts after the covered frames,
+  // in a scale of its own. Its keyframes see the table the first segment mapped: place
+  // recognition links them (every link a true revisit: by the ground truth the two cameras stand
+  // within 0.3 m and look within 30° of each other), and finish() moves the segment into the
+  // first one's world by the linked points. Without place recognition the segments are joined by
+  // the head model and the median-depth join only.
+  hawor::SlamOptions<double> on, off;
+  on.reloc.enabled = off.reloc.enabled = false;
+  on.revisit.enabled = off.revisit.enabled = false;
+  off.place.enabled = false;
+  const Run r = runPreset("table_work", 90, true, 1, 40, 49, on);
+  const Run q = runPreset("table_work", 90, true, 1, 40, 49, off);
+  REQUIRE(r.result.numResets >= 1);
+  REQUIRE(!r.result.placeLinks.empty());
+  CHECK(r.result.numPlaceLinks == static_cast<int>(r.result.placeLinks.size()));
+  CHECK(r.result.numPlacedSegments >= 1);
+  for (const auto& l : r.result.placeLinks) {
+    const std::size_t f = static_cast<std::size_t>(l.frame), g = static_cast<std::size_t>(l.oldFrame);
+    const double apart = (r.gt[f] - r.gt[g]).norm();
+    const double turned = angleDeg(r.gtR[g].transpose() * r.gtR[f]);
+    INFO("link " << l.frame << " -> " << l.oldFrame << " (" << l.points << " points): " << apart << " m, " << turned << " deg");
+    CHECK(l.frame > l.oldFrame);
+    CHECK(l.points >= on.place.minInliers);
+    CHECK(apart < 0.3);
+    CHECK(turned < 30.0);
+  }
+  CHECK(q.result.placeLinks.empty());
+  CHECK(q.result.numPlacedSegments == 0);
+  const double a = ateMetres(r), b = ateMetres(q);
+  INFO("ATE " << a << " m placed by the links, " << b << " m without, path " << r.path << " m");
+  CHECK(a < 0.03 * r.path);
+  CHECK(a < b);
+}
+
 TEST_CASE("MonoSlam: a view seen before a broken rotation chain puts the later frames' rotation right (link.enabled)", "[slam][system]") {
   // fast_turns, seed 8 (full-resolution textures, as `hawor synth` writes it): the map is lost
   // in a turn at frame 88; at frame 186 the head turns from rest onto a bare wall and no frame
@@ -371,4 +406,5 @@ TEST_CASE("MonoSlam: the revisit search and the sequence refinement tighten a ta
   INFO("ATE " << a << " m with, " << b << " m without, path " << on.path << " m");
   CHECK(a < 0.6 * b);
   CHECK(a < 0.05 * on.path);
+
 }

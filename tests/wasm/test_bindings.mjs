@@ -441,7 +441,8 @@ if (!haveNative || !fs.existsSync(path.join(nativeDir, 'models', 'hand_right.npz
   for (let i = 1; i < Tn; i++) pathLen += Math.hypot(gt.t[3 * i] - gt.t[3 * i - 3], gt.t[3 * i + 1] - gt.t[3 * i - 2], gt.t[3 * i + 2] - gt.t[3 * i - 1]);
   check('SLAM output sizes', res.rotations.length === 9 * Tn && res.translations.length === 3 * Tn &&
     res.status.length === Tn && res.keyframe.length === Tn && res.initialised && res.numKeyframes >= 2 &&
-    res.keyframeDepths.frames.length === res.numKeyframes && res.keyframeDepths.depth.length > 100);
+    res.keyframeDepths.frames.length === res.numKeyframes && res.keyframeDepths.depth.length > 100 &&
+    res.placeLinks instanceof Int32Array && res.placeLinks.length === 3 * res.numPlaceLinks);
   // the final map points: finite, (N, 3), in front of the first camera for most of them
   const nPts = res.points ? res.points.length / 3 : 0;
   let inFront = 0;

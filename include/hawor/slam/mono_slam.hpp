@@ -179,6 +179,12 @@ struct SlamResult {
   int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
   int numRevisitPoints = 0;           ///< old map points found again by the revisit search
   int numPlaceLinks = 0;              ///< keyframes linked to an older one of the same place (SlamOptions::place)
+  /// Those links: keyframe `frame` saw the place keyframe `oldFrame` had seen, verified by a
+  /// Sim(3) over `points` matched map points (mono_slam/place_links.hpp); in the order found.
+  struct PlaceLink {
+    int frame = 0, oldFrame = 0, points = 0;
+  };
+  std::vector<PlaceLink> placeLinks;
   int numPlacedSegments = 0;          ///< map segments moved into an earlier one's world by those links
   int numRefinedFrames = 0;           ///< frames adjusted by the sequence refinement (0: not run)
   int numHeadModelFrames = 0;         ///< unposed frames placed by the head model

@@ -385,6 +385,10 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   res.numRelocalisations = relocalisations_;
   res.numRevisitPoints = revisitPoints_;
   res.numPlaceLinks = static_cast<int>(placeLinks_.size());
+  for (const PlaceLink& l : placeLinks_) {
+    res.placeLinks.push_back({keyframes_[static_cast<std::size_t>(l.kf)].frame, keyframes_[static_cast<std::size_t>(l.oldKf)].frame,
+                              static_cast<int>(l.pairs.size())});
+  }
   res.numPlacedSegments = placedSegments_;
   res.numRefinedFrames = refinedFrames_;
   res.numHeadModelFrames = headModelFrames_;
