@@ -381,15 +381,15 @@ async function main(argv) {
     const tracked = st.map((s, i) => (s === 0 || s === 3 ? i : -1)).filter((i) => i >= 0);
     const firstTracked = tracked.length ? (reversed ? tracked[tracked.length - 1] : tracked[0]) : -1;
     return { name, reversed, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, passes ? passes.order[firstTracked] : firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
-      interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
+      interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, links: run.summary?.place_links, placed: run.summary?.placed_segments, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
   });
   const names = segs.map((s) => s.name);
-  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), ...(o.passes ? names.map((s) => `scale x ${s}`) : []), 'init', 'lost', 'interp', 'resets', 'ms/frame'];
+  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), ...(o.passes ? names.map((s) => `scale x ${s}`) : []), 'init', 'lost', 'interp', 'resets', 'links', 'placed', 'ms/frame'];
   const lines = [head];
   for (const r of rows) {
     if (r.error) { lines.push([r.name, `error: ${r.error}`]); continue; }
     lines.push([r.name, String(r.frames), ...names.map((s) => (r.camera[s]?.held ? `held ${f2(r.camera[s].atePct, 0)}` : f2(r.camera[s]?.atePct))),
-      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), ...(o.passes ? names.map((s) => f2(r.camera[s]?.scaleSpread)) : []), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), f2(r.msMedian, 1)]);
+      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), ...(o.passes ? names.map((s) => f2(r.camera[s]?.scaleSpread)) : []), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), String(r.links ?? '-'), String(r.placed ?? '-'), f2(r.msMedian, 1)]);
   }
   const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
   process.stdout.write(`${lines.map((l) => l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ')).join('\n')}\n`);
