@@ -404,6 +404,7 @@ class MonoSlam {
   void removeTracks(const std::vector<char>& drop);
 
   // finish() (mono_slam/finish.hpp)
+  void carryFramesWithKeyframes(const std::vector<SE3T>& before);
   void refineAllFrames();
   bool refineWholeSequence();
   bool refineFocalOnSequence();

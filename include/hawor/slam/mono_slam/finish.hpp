@@ -9,6 +9,27 @@
 
 namespace hawor {
 
+/// After the global bundle adjustment (keyframe poses `before` it): every keyframe's frame takes
+/// its adjusted pose, and every other posed frame moves with the keyframe before it,
+/// T ← T'_k·T_k⁻¹·T (its pose relative to that keyframe kept, as tracking made it). The
+/// adjustment may reshape a segment by more than refineAllFrames' gate (a segment rebuilt from a
+/// short pair, tied to the rest of the map by revisits: metres in the kitchen passes); a frame
+/// left at its old pose would keep the old shape, off its own keyframes.
+template <typename Scalar>
+void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before) {
+  std::size_t k = 0;
+  for (std::size_t f = 0; f < frames_.size(); ++f) {
+    while (k + 1 < keyframes_.size() && keyframes_[k + 1].frame <= static_cast<int>(f)) ++k;
+    if (keyframes_.empty() || keyframes_[k].frame > static_cast<int>(f)) continue;  // before the first keyframe
+    Frame& fr = frames_[f];
+    if (keyframes_[k].frame == static_cast<int>(f)) {
+      fr.T = keyframes_[k].T;
+    } else if (fr.posed) {
+      fr.T = keyframes_[k].T * before[k].inverse() * fr.T;
+    }
+  }
+}
+
 template <typename Scalar>
 void MonoSlam<Scalar>::refineAllFrames() {
   for (Frame& fr : frames_) {
@@ -274,8 +295,10 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
     // With the sequence refinement on, the focal is refined on its problem instead (every
     // frame's tracks, far more of the motion that determines the focal than the keyframes').
+    std::vector<SE3T> before(keyframes_.size());
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) before[k] = keyframes_[k].T;
     adjust(all, opt_.globalIterations, true, opt_.finish.refineFocal && !opt_.finish.sequenceRefine);
-    for (std::size_t k = 0; k < keyframes_.size(); ++k) frames_[static_cast<std::size_t>(keyframes_[k].frame)].T = keyframes_[k].T;
+    carryFramesWithKeyframes(before);
   }
   if (opt_.finish.refineFrames && !points_.empty()) refineAllFrames();
   fillUnposed();
