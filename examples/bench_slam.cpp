@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
   try {
     hawor::SlamOptions<double> check;
     hawor::setSlamOptions(check, settings);
+    check.validate();
   } catch (const hawor::Error& e) {
     std::fprintf(stderr, "bench_slam: --set: %s\n", e.what());
     return 2;

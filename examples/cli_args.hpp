@@ -52,6 +52,7 @@ class Args {
           value = argv[++i];
         }
         values_[key] = value;
+        all_[key].push_back(value);
       } else if (flags.count(key)) {
         if (has_inline) throw UsageError("option --" + key + " takes no value");
         flags_.insert(key);
@@ -61,6 +62,11 @@ class Args {
     }
   }
   bool help() const { return help_; }
+  /// Every value a repeatable option was given, in order (get() keeps the last).
+  std::vector<std::string> all(const std::string& k) const {
+    auto it = all_.find(k);
+    return it == all_.end() ? std::vector<std::string>() : it->second;
+  }
   bool has(const std::string& k) const { return values_.count(k) || flags_.count(k); }
   bool flag(const std::string& k) const { return flags_.count(k) != 0; }
   const std::vector<std::string>& positional() const { return positional_; }
@@ -103,6 +109,7 @@ class Args {
  private:
   bool help_ = false;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> all_;
   std::set<std::string> flags_;
   std::vector<std::string> positional_;
 };

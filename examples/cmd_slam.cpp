@@ -65,7 +65,8 @@ const char* kSlamHelp =
     "  --focal-prior S       std of log(f / guess) of the guess (default 0.3, a FOV guess)\n"
     "  --set NAME=VALUE,...  set SlamOptions fields by name, for ablations (for example\n"
     "                        --set init.minRotationDeg=9,reloc.anchors=4; twoView.NAME for\n"
-    "                        the initialisation's); an unknown name lists the known ones\n"
+    "                        the initialisation's); an unknown name lists the known ones;\n"
+    "                        may be repeated\n"
     "  --verbose             one line per frame on stderr, and the SLAM's events (initialisation,\n"
     "                        PnP, keyframes, losses)\n"
     "\n"
@@ -144,7 +145,8 @@ int cmdSlam(int argc, char** argv) {
     if (!(opt.focal.priorSigmaLog > 0)) throw UsageError("--focal-prior must be > 0");
   }
   try {
-    hawor::setSlamOptions(opt, args.get("set", ""));
+    for (const std::string& s : args.all("set")) hawor::setSlamOptions(opt, s);  // repeated --set: all of them, in order
+    opt.validate();  // a bad value or combination is the user's, named before any frame is read
   } catch (const hawor::Error& e) {
     throw UsageError(std::string("--set: ") + (e.what() + 7));  // without "hawor: "
   }

@@ -91,16 +91,18 @@ def check_set_option(seq, intr, tmp):
     check("--set knows every declared option", known == declared,
           ("missing", sorted(declared - known), "extra", sorted(known - declared)))
     for bad, word in (("minInliers=2.5", "integer"), ("useMasks=yes", "true"), ("init.minFlowPx=nan", "number"),
-                      ("klt.maxResidual=", "number"), ("minInliers", "NAME=VALUE"), ("=3", "NAME=VALUE")):
+                      ("klt.maxResidual=", "number"), ("minInliers", "NAME=VALUE"), ("=3", "NAME=VALUE"),
+                      ("reloc.enabled=false", "revisit.enabled needs reloc.enabled"), ("minInliers=2", "minInliers")):
         rc, _, err = run(*base, "--out", os.path.join(tmp, "s.tum"), "--set", bad)
         check("--set %s refused" % bad, rc == 2 and word in err, err)
     outs = []
-    for extra in (["--no-mask"], ["--set", "useMasks=false,minInliers=25"]):
+    for extra in (["--no-mask"], ["--set", "useMasks=false,minInliers=25"], ["--set", "useMasks=false", "--set", "minInliers=25"]):
         traj = os.path.join(tmp, "set%d.tum" % len(outs))
         rc, _, err = run(*base, "--masks", masks, "--out", traj, *extra)
         check("--set run %s" % extra, rc == 0, err)
         outs.append(open(traj).read() if rc == 0 else None)
     check("--set useMasks=false is --no-mask", outs[0] is not None and outs[0] == outs[1])
+    check("repeated --set flags all apply", outs[0] is not None and outs[0] == outs[2])
 
 
 def main():
