@@ -95,7 +95,7 @@ class BundleAdjuster {
     return static_cast<int>(std::lower_bound(keys_.begin(), keys_.end(), blockKey(ci, cj)) - keys_.begin());
   }
   void linearise();
-  bool solveStep(Scalar lambda, Scalar& predicted);
+  bool solveStep(ReducedCameraSolver<Scalar>& solver, Scalar lambda, Scalar& predicted);
   Scalar stateNorm() const;
 
   BAProblem<Scalar>& P_;
@@ -130,7 +130,6 @@ class BundleAdjuster {
   VecX<Scalar> rhs_, dc_;
   std::vector<S3> dp_;
   Scalar gradMax_ = Scalar(0);
-  ReducedCameraSolver<Scalar>* solver_ = nullptr;  ///< run()'s, while it runs
 };
 
 template <typename Scalar>
@@ -393,7 +392,7 @@ void BundleAdjuster<Scalar>::linearise() {
 /// Solves the damped system (dc_, dp_); returns false when a factorisation fails. Also returns the
 /// predicted decrease −gᵀδ + λ·δᵀDδ of the model F + 2gᵀδ + δᵀHδ.
 template <typename Scalar>
-bool BundleAdjuster<Scalar>::solveStep(Scalar lambda, Scalar& predicted) {
+bool BundleAdjuster<Scalar>::solveStep(ReducedCameraSolver<Scalar>& solver, Scalar lambda, Scalar& predicted) {
   Scalar dDd = Scalar(0), gd = Scalar(0);
   // Point blocks: damped inverse.
   for (int j = 0; j < nVP_; ++j) {
@@ -444,7 +443,7 @@ bool BundleAdjuster<Scalar>::solveStep(Scalar lambda, Scalar& predicted) {
     }
   }
   // Solve S_·δc = rhs_.
-  if (nVC_ > 0 && !solver_->solve(S_, rhs_, dc_)) return false;
+  if (nVC_ > 0 && !solver.solve(S_, rhs_, dc_)) return false;
   // Back-substitution for the points.
   for (int j = 0; j < nVP_; ++j) {
     const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
@@ -499,7 +498,6 @@ BAReport<Scalar> BundleAdjuster<Scalar>::run() {
   }
   buildStructure();
   ReducedCameraSolver<Scalar> solver(method_, nVC_, keys_, diagBlock_, opt_.cgTolerance, opt_.cgMaxIterations);
-  solver_ = &solver;
 
   // Candidate state.
   std::vector<SE3<Scalar>> newPoses = P_.poses;
@@ -519,7 +517,7 @@ BAReport<Scalar> BundleAdjuster<Scalar>::run() {
     }
     ++rep_.iterations;
     Scalar predicted = Scalar(0);
-    if (!solveStep(lambda, predicted)) {
+    if (!solveStep(solver, lambda, predicted)) {
       lambda *= nu;
       nu *= Scalar(2);
       if (lambda > opt_.maxLambda) {
@@ -578,7 +576,6 @@ BAReport<Scalar> BundleAdjuster<Scalar>::run() {
       }
     }
   }
-  solver_ = nullptr;
   rep_.finalCost = Scalar(F);
   rep_.finalRmsPx = nU_ > 0 ? Scalar(std::sqrt(sumSq / nU_)) : Scalar(0);
   rep_.lambda = lambda;

@@ -17,10 +17,11 @@ namespace hawor {
 /// left at its old pose would keep the old shape, off its own keyframes.
 template <typename Scalar>
 void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before) {
+  if (keyframes_.empty()) return;
   std::size_t k = 0;
   for (std::size_t f = 0; f < frames_.size(); ++f) {
     while (k + 1 < keyframes_.size() && keyframes_[k + 1].frame <= static_cast<int>(f)) ++k;
-    if (keyframes_.empty() || keyframes_[k].frame > static_cast<int>(f)) continue;  // before the first keyframe
+    if (keyframes_[k].frame > static_cast<int>(f)) continue;  // before the first keyframe
     Frame& fr = frames_[f];
     if (keyframes_[k].frame == static_cast<int>(f)) {
       fr.T = keyframes_[k].T;
