@@ -71,9 +71,9 @@ const char* kSlamHelp =
     "                        PnP, keyframes, losses)\n"
     "\n"
     "Prints one JSON object: frames, keyframes, tracked, interpolated, lost, relocalised,\n"
-    "losses, resets, relocalisations, initialised, camera, rectified_outside (pixels of the\n"
-    "rectified image the lens does not see), median_ms_per_frame and p95_ms_per_frame (with the\n"
-    "rectification), and\n"
+    "losses, resets, relocalisations, place_relocalisations, initialised, camera,\n"
+    "rectified_outside (pixels of the rectified image the lens does not see),\n"
+    "median_ms_per_frame and p95_ms_per_frame (with the rectification), and\n"
     "with --refine-focal: focal_fx (the focal used), focal_guess_fx, focal_refined, focal_std\n"
     "(posterior std of log f, null when declined) and focal_reason.\n";
 
@@ -267,6 +267,7 @@ int cmdSlam(int argc, char** argv) {
       .integer("losses", r.numLosses)
       .integer("resets", r.numResets)
       .integer("relocalisations", r.numRelocalisations)
+      .integer("place_relocalisations", r.numPlaceRelocalisations)
       .integer("revisit_points", r.numRevisitPoints)
       .integer("place_links", r.numPlaceLinks)
       .raw("place_link_frames", links)

@@ -22,7 +22,7 @@
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
 //       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
 //       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
-//       numResets, numRelocalisations, numRevisitPoints, numPlaceLinks, placeLinks (Int32Array:
+//       numResets, numRelocalisations, numPlaceRelocalisations, numRevisitPoints, numPlaceLinks, placeLinks (Int32Array:
 //       frame, older frame, matched points per link), numPlacedSegments,
 //       numRefinedFrames, numHeadModelFrames, initialised, focal: {attempted, accepted, changed, guessFx,
 //       fx, fy (the output's), estimateFx, stdLog (posterior std of log f), dataStdLog, rmsGuessPx, rmsPx,
@@ -398,6 +398,7 @@ class MonoSlam {
       o.set("numLosses", r.numLosses);
       o.set("numResets", r.numResets);
       o.set("numRelocalisations", r.numRelocalisations);
+      o.set("numPlaceRelocalisations", r.numPlaceRelocalisations);
       o.set("numRevisitPoints", r.numRevisitPoints);
       o.set("numPlaceLinks", r.numPlaceLinks);
       std::vector<int> links;  // frame, older frame, matched points per place link

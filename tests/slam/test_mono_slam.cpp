@@ -238,6 +238,7 @@ TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the
   // recognition the segments are joined by the head model and the median-depth join only.
   hawor::SlamOptions<double> noPlace = off;
   noPlace.place.enabled = false;
+  noPlace.reloc.byPlace = false;
   const Run p = runPreset("table_work", 90, true, 1, 40, 49, noPlace);
   REQUIRE(!q.result.placeLinks.empty());
   CHECK(q.result.numPlaceLinks == static_cast<int>(q.result.placeLinks.size()));
@@ -258,6 +259,37 @@ TEST_CASE("MonoSlam: after a hand covers the whole view, relocalisation puts the
   INFO("ATE " << placed << " m placed by the links, " << unplaced << " m without, path " << q.path << " m");
   CHECK(placed < 0.03 * q.path);
   CHECK(placed < unplaced);
+}
+
+TEST_CASE("MonoSlam: relocalisation by place recognition re-enters the old map without kept images", "[slam][system]") {
+  // The same loss with no keyframe image kept (reloc.keyframes = reloc.anchors = 0: the KLT
+  // search has nothing to search from, as when the view comes back to a place mapped long
+  // before): the frames' tracks described and looked up in the place index find the old
+  // keyframes, two agreeing PnP poses put the frame back, and the reset is undone.
+  hawor::SlamOptions<double> opt;
+  opt.reloc.keyframes = 0;
+  opt.reloc.anchors = 0;
+  const Run r = runPreset("table_work", 70, true, 1, 40, 49, opt);
+  const auto& a = r.result;
+  CHECK(a.numLosses == 1);
+  CHECK(a.numRelocalisations == 0);
+  CHECK(a.numPlaceRelocalisations == 1);
+  CHECK(a.numResets == 0);
+  int back = -1;
+  for (int i = 50; i < 70 && back < 0; ++i) {
+    if (a.status[static_cast<std::size_t>(i)] == hawor::SlamStatus::Relocalised) back = i;
+  }
+  INFO("relocalised at frame " << back);
+  CHECK(back >= 50);
+  CHECK(back <= 56);
+  // Without it the same loss starts a new map segment.
+  opt.reloc.byPlace = false;
+  const Run q = runPreset("table_work", 70, true, 1, 40, 49, opt);
+  CHECK(q.result.numPlaceRelocalisations == 0);
+  CHECK(q.result.numResets == 1);
+  const double ate = ateMetres(r);
+  INFO("ATE " << ate << " m over a path of " << r.path << " m (" << ateMetres(q) << " m with a new segment)");
+  CHECK(ate < 0.03 * r.path);
 }
 
 

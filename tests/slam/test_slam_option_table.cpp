@@ -81,6 +81,9 @@ TEMPLATE_TEST_CASE("SlamOptions::validate names the bad field or combination", "
   };
   CHECK(message(with("reloc.enabled=false")).find("revisit.enabled needs reloc.enabled") != std::string::npos);
   CHECK(message(with("reloc.enabled=false,revisit.enabled=false")).empty());
+  CHECK(message(with("place.enabled=false")).find("reloc.byPlace needs place.enabled") != std::string::npos);
+  CHECK(message(with("place.enabled=false,reloc.byPlace=false")).empty());
+  CHECK(message(with("reloc.placeAgreeDeg=-1")).find("reloc.placeAgreeDeg") != std::string::npos);
   CHECK(message(with("join.headModelAll=false")).find("join.headModelAll") != std::string::npos);
   CHECK(message(with("join.headModelAll=false,join.beforeRefine=false,join.placeShort=false")).empty());
   CHECK(message(with("reloc.spacing=0")).find("reloc.spacing") != std::string::npos);

@@ -65,7 +65,15 @@
 //      tracked rays; after lostFramesBeforeReset lost frames the system re-initialises a new map
 //      segment from the current frame and joins it to the old world at the frame where
 //      tracking was lost: rotation from the ray chain, position from the last estimate, scale so that the median scene depth is
-//      continuous across the join. A segment that later sees the old map again is not merged
+//      continuous across the join. Until that new map is built, RELOCALISATION BY PLACE
+//      (reloc.byPlace, on; mono_slam/place_links.hpp) describes the frame's tracks and asks the
+//      place index for keyframes of any segment: two consecutive frames' PnP poses on the
+//      matched map points, agreeing with the rays' rotation between them, put the frame into
+//      that segment (the lost one, or an older one: the head came back to a place it mapped),
+//      its map points around the view found by projection, and the segment goes on there (a
+//      segment's frames and keyframes need not be contiguous; segmentParent_ keeps which
+//      segment each one was started from, and the joins move a segment with the ones started
+//      from it). A segment that later sees the old map again is not merged
 //      with it; but when the rotation chain to the old segment is broken (frames with no
 //      rotation, or one only carried on), the old segment's kept images are searched for the
 //      current view (PLACE RECOGNITION, link.enabled) and the poses found in the old world fix
@@ -177,6 +185,7 @@ struct SlamResult {
   int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
   int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
   int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
+  int numPlaceRelocalisations = 0;    ///< lost frames put into a map (the lost one or an older one) by place recognition
   int numRevisitPoints = 0;           ///< old map points found again by the revisit search
   int numPlaceLinks = 0;              ///< keyframes linked to an older one of the same place (SlamOptions::place)
   /// Those links: keyframe `frame` saw the place keyframe `oldFrame` had seen, verified by a
@@ -264,6 +273,7 @@ class MonoSlam {
       searchSegmentLinks(f);
     }
     recordObservations(frames_.back());
+    frames_.back().segment = segment_;
     return frames_.back().status;
   }
 
@@ -340,6 +350,7 @@ class MonoSlam {
     bool rotationKnown = true; ///< rotation from rays/tracking (false: only interpolate)
     bool coasted = false;      ///< rotation carried on from the last steps (coastRotation)
     int inliers = 0;
+    int segment = 0;           ///< the map segment (world) its pose is in
     CoarseMask mask;           ///< hand mask, kept for the recent frames while initialising
     std::vector<int> obsTrack;
     std::vector<Vec2f> obsUv;
@@ -387,6 +398,8 @@ class MonoSlam {
   // place recognition (mono_slam/place_links.hpp)
   void describeAndLinkKeyframe(int k);
   bool verifyPlaceLink(int k, int c, int votes);
+  bool relocaliseByPlace(int f);
+  void searchPlaceByProjection(int f, int centre);
   int placeSegmentsByLinks();
 
   // mapping (mono_slam/mapping.hpp)
@@ -439,23 +452,39 @@ class MonoSlam {
   std::vector<int> trackAlias_;  ///< track id → the id the same track had before a reset (−1: none; may be short)
   int refFrame_ = 0, lastInitAttempt_ = -1000;
   int segment_ = 0, segmentStart_ = 0;  ///< current map segment, its first frame (reset)
+  /// Per segment id: the segment it was started from at a reset (its world was joined to that
+  /// one's), −1 for the first. A segment re-entered later (relocalisation by place recognition)
+  /// keeps its id, so a segment's frames and keyframes need not be contiguous: "a segment and
+  /// the ones started from it" is the subtree, not the ids from it on.
+  std::vector<int> segmentParent_{-1};
+  bool inSegment(int label, int root) const {
+    while (label > root) label = segmentParent_[static_cast<std::size_t>(label)];
+    return label == root;
+  }
   std::vector<SegmentLink> links_;  ///< SlamOptions::link.enabled
   BinaryDescriptorExtractor describer_;  ///< SlamOptions::place
   PlaceIndex placeIndex_;
   std::vector<PlaceLink> placeLinks_;
   int placedSegments_ = 0;
   int lost_ = 0, losses_ = 0, resets_ = 0, relocalisations_ = 0, revisitPoints_ = 0, refinedFrames_ = 0, headModelFrames_ = 0;
-  /// Frame ranges [a, b) of the segments placed by the head model (join.placeShort): their
-  /// keyframe depths and points are in a scale of their own and are left out of the result.
-  std::vector<std::pair<int, int>> placedRanges_;
+  /// The segments placed by the head model (join.placeShort), with their frame ranges [from, to):
+  /// their keyframe depths and points are in a scale of their own and are left out of the result.
+  struct PlacedRange {
+    int from, to, segment;
+  };
+  std::vector<PlacedRange> placedRanges_;
   bool placedFrame(int f) const {
-    for (const auto& r : placedRanges_) {
-      if (f >= r.first && f < r.second) return true;
+    for (const PlacedRange& r : placedRanges_) {
+      if (f >= r.from && f < r.to && frames_[static_cast<std::size_t>(f)].segment == r.segment) return true;
     }
     return false;
   }
   int relocCandidateFrame_ = -1;  ///< last frame whose relocalisation waits for the next one's agreement
   SE3T relocCandidate_;
+  int placeCandFrame_ = -1, placeCandSegment_ = -1, placeCandInliers_ = 0;  ///< the same for the relocalisation by place
+  bool placeWaiting_ = false;  ///< this frame's place pose waits for the next frame's
+  SE3T placeCand_;
+  int placeRelocalisations_ = 0;
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
   Scalar lastMedianDepth_ = Scalar(0);

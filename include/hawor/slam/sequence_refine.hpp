@@ -560,18 +560,22 @@ SequenceRefineResult<Scalar> refineSequence(const PinholeCamera<Scalar>& cam, co
   }
   // Trusted frames the refinement did not take (too few of their points adjusted in a long,
   // subsampled sequence), ill-conditioned ones excepted, keep their input pose moved with the
-  // adjustment of the nearest adjusted frame (before them, else after): T' = T'_a·T_a⁻¹·T.
+  // adjustment of the nearest adjusted frame in time (the one before on a tie; the nearest, not
+  // the one before: the first frames after a loss would take the correction of the frames before
+  // it, another part of the map): T' = T'_a·T_a⁻¹·T.
   res.carried.assign(static_cast<std::size_t>(nF), 0);
+  std::vector<int> nextAdjusted(static_cast<std::size_t>(nF) + 1, -1);
+  for (int f = nF - 1; f >= 0; --f) {
+    nextAdjusted[static_cast<std::size_t>(f)] = res.adjusted[static_cast<std::size_t>(f)] ? f : nextAdjusted[static_cast<std::size_t>(f) + 1];
+  }
   for (int f = 0, prev = -1; f < nF; ++f) {
     if (res.adjusted[static_cast<std::size_t>(f)]) {
       prev = f;
       continue;
     }
     if (state[static_cast<std::size_t>(f)] < 2 || ill[static_cast<std::size_t>(f)]) continue;
-    int ref = prev;
-    if (ref < 0) {
-      for (int g = f + 1; g < nF && ref < 0; ++g) ref = res.adjusted[static_cast<std::size_t>(g)] ? g : -1;
-    }
+    const int next = nextAdjusted[static_cast<std::size_t>(f)];
+    const int ref = prev < 0 ? next : next < 0 || f - prev <= next - f ? prev : next;
     if (ref < 0) continue;
     res.poses[static_cast<std::size_t>(f)] = res.poses[static_cast<std::size_t>(ref)] * poses[static_cast<std::size_t>(ref)].inverse() *
                                              poses[static_cast<std::size_t>(f)];

@@ -128,13 +128,21 @@ struct SlamRelocOptions {
   Scalar maxShiftPx = Scalar(40);
   int minInliers = 30;
   Scalar maxRotationDeg = Scalar(0.6);  ///< relocalised vs the rays' rotation, at most
+  /// After the reset, also by place recognition into any segment's map (needs place.enabled;
+  /// mono_slam/place_links.hpp relocaliseByPlace): a lost place re-entered joins its old map.
+  bool byPlace = true;
+  /// Its two consecutive poses vs the rays' rotation between them, at most (the rays' pure-rotation
+  /// fit absorbs the step's translation: up to 1° a frame walking; the matches are descriptors',
+  /// not searched around a guess, so a wrong pair is not pulled towards agreement).
+  Scalar placeAgreeDeg = Scalar(2);
 
   /// Throws hawor::Error naming the first bad field.
   void validate() const {
     if (keyframes < 0 || spacing < 1 || anchors < 0) throw Error("reloc.keyframes and reloc.anchors must be >= 0, reloc.spacing >= 1");
     if (maxPoints < 1 || minInliers < 6) throw Error("reloc.maxPoints must be >= 1, reloc.minInliers >= 6");
-    if (!(anchorDeg > Scalar(0)) || !(anchorDepths >= Scalar(0)) || !(maxShiftPx > Scalar(0)) || !(maxRotationDeg >= Scalar(0))) {
-      throw Error("reloc.anchorDeg and reloc.maxShiftPx must be > 0, reloc.anchorDepths and reloc.maxRotationDeg >= 0");
+    if (!(anchorDeg > Scalar(0)) || !(anchorDepths >= Scalar(0)) || !(maxShiftPx > Scalar(0)) || !(maxRotationDeg >= Scalar(0)) ||
+        !(placeAgreeDeg >= Scalar(0))) {
+      throw Error("reloc.anchorDeg and reloc.maxShiftPx must be > 0, reloc.anchorDepths, reloc.maxRotationDeg and reloc.placeAgreeDeg >= 0");
     }
   }
 };
@@ -325,6 +333,7 @@ struct SlamOptions {
     finish.validate();
     join.validate();
     if (revisit.enabled && !reloc.enabled) throw Error("revisit.enabled needs reloc.enabled (the revisit search uses its kept keyframes)");
+    if (reloc.byPlace && !place.enabled) throw Error("reloc.byPlace needs place.enabled (it asks the place index)");
   }
 
   SlamOptions() {

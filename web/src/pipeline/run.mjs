@@ -99,7 +99,7 @@
 //                 estimated), focalEstimateFx (the SLAM's estimate even when not applied, null
 //                 when none), focalReason (why refined / kept / declined), focalPasses (2: the
 //                 SLAM ran again with the refined focal) },
-//   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, numRevisitPoints,
+//   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, numPlaceRelocalisations, numRevisitPoints,
 //           numPlaceLinks, numPlacedSegments, numRefinedFrames, numHeadModelFrames, initialised },
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
@@ -794,7 +794,7 @@ export async function runPipeline(source, options, hooks = {}) {
       threads: options.threads ?? 1,
       intrinsics: intrOut,
       slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
-        numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, numRevisitPoints: traj.numRevisitPoints,
+        numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, numPlaceRelocalisations: traj.numPlaceRelocalisations, numRevisitPoints: traj.numRevisitPoints,
         numPlaceLinks: traj.numPlaceLinks, numPlacedSegments: traj.numPlacedSegments, numRefinedFrames: traj.numRefinedFrames, numHeadModelFrames: traj.numHeadModelFrames, initialised: traj.initialised },
       camera: { positions, quaternions, status: traj.status, timestamps },
       points,

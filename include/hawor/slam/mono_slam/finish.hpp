@@ -14,7 +14,9 @@ namespace hawor {
 /// T ← T'_k·T_k⁻¹·T (its pose relative to that keyframe kept, as tracking made it). The
 /// adjustment may reshape a segment by more than refineAllFrames' gate (a segment rebuilt from a
 /// short pair, tied to the rest of the map by revisits: metres in the kitchen passes); a frame
-/// left at its old pose would keep the old shape, off its own keyframes.
+/// left at its old pose would keep the old shape, off its own keyframes. A frame whose keyframe
+/// before it is in another segment (the frame before a relocalisation by place, posed in the
+/// segment it re-entered) moves with the next keyframe of its own segment.
 template <typename Scalar>
 void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before) {
   if (keyframes_.empty()) return;
@@ -25,9 +27,13 @@ void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before)
     Frame& fr = frames_[f];
     if (keyframes_[k].frame == static_cast<int>(f)) {
       fr.T = keyframes_[k].T;
-    } else if (fr.posed) {
-      fr.T = keyframes_[k].T * before[k].inverse() * fr.T;
+      continue;
     }
+    if (!fr.posed) continue;
+    std::size_t c = k;
+    while (c < keyframes_.size() && keyframes_[c].segment != fr.segment) ++c;
+    if (c == keyframes_.size()) continue;
+    fr.T = keyframes_[c].T * before[c].inverse() * fr.T;
   }
 }
 
@@ -36,11 +42,13 @@ void MonoSlam<Scalar>::refineAllFrames() {
   for (Frame& fr : frames_) {
     std::vector<V3> X;
     std::vector<V2> uv;
+    std::vector<int> pids;
     for (std::size_t i = 0; i < fr.obsTrack.size(); ++i) {
       const int pid = trackPoint_[static_cast<std::size_t>(fr.obsTrack[i])];
       if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
       X.push_back(points_[static_cast<std::size_t>(pid)].X);
       uv.push_back(V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1))));
+      pids.push_back(pid);
     }
     if (static_cast<int>(X.size()) < opt_.minInliers) continue;
     PnPRansacOptions<Scalar> po = opt_.pnp;
@@ -69,6 +77,14 @@ void MonoSlam<Scalar>::refineAllFrames() {
         fr.posed = true;
         fr.inliers = r.numInliers;
         if (fr.status == SlamStatus::Interpolated) fr.status = SlamStatus::Tracked;
+        // Posed in the world of the points it was resected on (a lost frame before a
+        // relocalisation by place saw the segment re-entered): it moves with that segment.
+        std::vector<int> votes(segmentParent_.size(), 0);
+        for (std::size_t i = 0; i < pids.size(); ++i) {
+          const Obs* o = points_[static_cast<std::size_t>(pids[i])].obs.empty() ? nullptr : &points_[static_cast<std::size_t>(pids[i])].obs.front();
+          if (r.inliers[i] && o) ++votes[static_cast<std::size_t>(keyframes_[static_cast<std::size_t>(o->kf)].segment)];
+        }
+        fr.segment = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
       }
     }
   }
@@ -407,6 +423,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   res.numLosses = losses_;
   res.numResets = resets_;
   res.numRelocalisations = relocalisations_;
+  res.numPlaceRelocalisations = placeRelocalisations_;
   res.numRevisitPoints = revisitPoints_;
   res.numPlaceLinks = static_cast<int>(placeLinks_.size());
   for (const PlaceLink& l : placeLinks_) {

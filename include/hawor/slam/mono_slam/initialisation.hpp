@@ -21,7 +21,8 @@ void MonoSlam<Scalar>::initialise(int f) {
     fr.rotationKnown = false;
   }
   fr.status = afterLoss_ ? SlamStatus::Lost : SlamStatus::Interpolated;
-  if (afterLoss_ && relocalise(f)) return;
+  placeWaiting_ = false;
+  if (afterLoss_ && (relocalise(f) || relocaliseByPlace(f))) return;
   // Reference: the fixed reference frame (refFrame_, replaced when it has lost most of its
   // tracks), or any of the last init.maxGap frames (their tracks are in the per-frame
   // observations, their rotations from the rays): the oldest of them sharing init.minTracks
@@ -70,7 +71,8 @@ void MonoSlam<Scalar>::initialise(int f) {
   // absorbs most of the parallax (the rotation–translation ambiguity); the two-view decides.
   const Scalar turnedDeg = bestG >= 0 ? rotationAngleDeg(frames_[static_cast<std::size_t>(bestG)].T, fr.T) : Scalar(0);
   const bool fastTurn = bestG >= 0 && turning_ && turnedDeg >= opt_.init.minRotationDeg;
-  const bool tryNow = bestG >= 0 && ((bestFlow >= float(opt_.init.minFlowPx) && f - lastInitAttempt_ >= opt_.init.everyFrames) ||
+  // (Not while a place found for relocalisation waits for the next frame: the old map first.)
+  const bool tryNow = bestG >= 0 && !placeWaiting_ && ((bestFlow >= float(opt_.init.minFlowPx) && f - lastInitAttempt_ >= opt_.init.everyFrames) ||
                                      (fastTurn && f - lastInitAttempt_ >= 2));
   if (tryNow) {
     lastInitAttempt_ = f;

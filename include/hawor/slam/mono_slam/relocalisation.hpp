@@ -75,6 +75,7 @@ bool MonoSlam<Scalar>::relocalise(int f) {
     // The reset built no map: the old segment goes on.
     --resets_;
     segment_ = keyframes_.back().segment;
+    for (int g = segmentStart_; g < f; ++g) frames_[static_cast<std::size_t>(g)].segment = segment_;
     for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
     for (Track& t : tracks_) t.fromRef = false;
     state_ = State::Tracking;
@@ -359,12 +360,18 @@ void MonoSlam<Scalar>::applySegmentLinks() {
     auto move = [&](const SE3T& T) {
       return SE3T(SO3<Scalar>::fromMatrix(Mat3<Scalar>(R * T.rotationMatrix())), V3(R * (T.translation() - c) + c));
     };
-    for (int g = S; g < n; ++g) frames_[static_cast<std::size_t>(g)].T = move(frames_[static_cast<std::size_t>(g)].T);
+    // From S on, in S's segment and the ones started from it (not a segment re-entered later).
+    const int seg = frames_[static_cast<std::size_t>(S)].segment;
+    for (int g = S; g < n; ++g) {
+      if (inSegment(frames_[static_cast<std::size_t>(g)].segment, seg)) frames_[static_cast<std::size_t>(g)].T = move(frames_[static_cast<std::size_t>(g)].T);
+    }
     for (Keyframe& kf : keyframes_) {
-      if (kf.frame >= S) kf.T = move(kf.T);
+      if (kf.frame >= S && inSegment(kf.segment, seg)) kf.T = move(kf.T);
     }
     for (MapPoint& p : points_) {
-      if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].frame >= S) p.X = V3(R * (p.X - c) + c);
+      if (p.obs.empty()) continue;
+      const Keyframe& k0 = keyframes_[static_cast<std::size_t>(p.obs.front().kf)];
+      if (k0.frame >= S && inSegment(k0.segment, seg)) p.X = V3(R * (p.X - c) + c);
     }
     made.emplace_back(S, R);
   }

@@ -8,32 +8,40 @@
 
 namespace hawor {
 
-/// Applies the position map `g` (a similarity; `R`, when given, its rotation, else none) to the
-/// frames from f1 on, the keyframes of segment `seg` and later ones, and their points (later
-/// segments continue its scale).
+/// Applies the position map `g` (a similarity; `R`, when given, its rotation, else none) to
+/// segment `seg` and the segments started from it (inSegment: their worlds were joined to its;
+/// they continue its scale): their frames from f1 on, keyframes and points.
 template <typename Scalar>
 template <typename G>
 void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g, const SO3<Scalar>* R) {
   auto move = [&](const SE3T& T) { return SE3T(R ? SO3<Scalar>(*R * T.rotation()) : T.rotation(), g(V3(T.translation()))); };
-  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) frames_[f].T = move(frames_[f].T);
+  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) {
+    if (inSegment(frames_[f].segment, seg)) frames_[f].T = move(frames_[f].T);
+  }
   for (Keyframe& kf : keyframes_) {
-    if (kf.segment >= seg) kf.T = move(kf.T);
+    if (inSegment(kf.segment, seg)) kf.T = move(kf.T);
   }
   for (MapPoint& p : points_) {
-    if (!p.obs.empty() && keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment >= seg) p.X = g(V3(p.X));
+    if (!p.obs.empty() && inSegment(keyframes_[static_cast<std::size_t>(p.obs.front().kf)].segment, seg)) p.X = g(V3(p.X));
   }
   // The sequence refinement's points (after it ran) by their first observation.
   for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
-    if (!seqPointObs_[j].empty() && seqPointObs_[j].front().first >= f1) seqPoints_[j] = g(V3(seqPoints_[j]));
+    if (seqPointObs_[j].empty()) continue;
+    const int f = seqPointObs_[j].front().first;
+    if (f >= f1 && inSegment(frames_[static_cast<std::size_t>(f)].segment, seg)) seqPoints_[j] = g(V3(seqPoints_[j]));
   }
 }
 
-/// The first keyframe of each map segment, in order.
+/// The first keyframe of each map segment, in the order the segments were started (a segment
+/// re-entered later is listed once).
 template <typename Scalar>
 std::vector<int> MonoSlam<Scalar>::segmentFirstKeyframes() const {
   std::vector<int> first;
+  std::vector<char> seen(segmentParent_.size(), 0);
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    if (k == 0 || keyframes_[k].segment != keyframes_[k - 1].segment) first.push_back(static_cast<int>(k));
+    char& s = seen[static_cast<std::size_t>(keyframes_[k].segment)];
+    if (!s) first.push_back(static_cast<int>(k));
+    s = 1;
   }
   return first;
 }
@@ -59,11 +67,14 @@ void MonoSlam<Scalar>::joinSegmentPairsByHead() {
     const int f1 = keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
     const int f2 = i + 1 < segFirstKf.size() ? keyframes_[static_cast<std::size_t>(segFirstKf[i + 1])].frame : n;
     std::vector<int> idxA, idxB;
+    // A: the segment it was started from, before it; B: its own frames.
+    const int seg = keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment;
+    const int parent = segmentParent_[static_cast<std::size_t>(seg)];
     for (int f = std::max(f0, f1 - opt_.headModel.window); f < f1; ++f) {
-      if (usable[static_cast<std::size_t>(f)]) idxA.push_back(f);
+      if (usable[static_cast<std::size_t>(f)] && frames_[static_cast<std::size_t>(f)].segment == parent) idxA.push_back(f);
     }
     for (int f = f1; f < std::min(f2, f1 + opt_.headModel.window); ++f) {
-      if (usable[static_cast<std::size_t>(f)]) idxB.push_back(f);
+      if (usable[static_cast<std::size_t>(f)] && frames_[static_cast<std::size_t>(f)].segment == seg) idxB.push_back(f);
     }
     const HeadJoin<Scalar> hj = fitHeadJoin(T, idxA, idxB, opt_.headModel);
     if (opt_.log) {
@@ -74,9 +85,7 @@ void MonoSlam<Scalar>::joinSegmentPairsByHead() {
                ", view spreads " + std::to_string(double(hj.spreadA)) + "/" + std::to_string(double(hj.spreadB)) + " deg" +
                (hj.ok ? ": joined" : ": not used"));
     }
-    if (hj.ok) {
-      transformFrom(f1, keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment, [&](const V3& x) { return V3(hj.s * x + hj.t); });
-    }
+    if (hj.ok) transformFrom(f1, seg, [&](const V3& x) { return V3(hj.s * x + hj.t); });
   }
 }
 
@@ -93,12 +102,20 @@ bool MonoSlam<Scalar>::joinAllSegmentsByHead(bool placeShort) {
   if (S < 2) return false;
   std::vector<SE3T> T(static_cast<std::size_t>(n));
   std::vector<char> usable(static_cast<std::size_t>(n));
-  for (int f = 0; f < n; ++f) {
-    T[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].T;
-    usable[static_cast<std::size_t>(f)] = frames_[static_cast<std::size_t>(f)].posed;
+  std::vector<int> first(S + 1, n), segOf(S);
+  for (std::size_t i = 0; i < S; ++i) {
+    first[i] = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+    segOf[i] = keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment;
   }
-  std::vector<int> first(S + 1, n);
-  for (std::size_t i = 0; i < S; ++i) first[i] = i == 0 ? 0 : keyframes_[static_cast<std::size_t>(segFirstKf[i])].frame;
+  // Segment i's frames: its range [first[i], first[i + 1]) less the frames of segments
+  // re-entered inside it (they are in another world).
+  for (std::size_t i = 0; i < S; ++i) {
+    for (int f = first[i]; f < first[i + 1]; ++f) {
+      const Frame& fr = frames_[static_cast<std::size_t>(f)];
+      T[static_cast<std::size_t>(f)] = fr.T;
+      usable[static_cast<std::size_t>(f)] = fr.posed && fr.segment == segOf[i];
+    }
+  }
   const SegmentsHeadJoin<Scalar> R = joinSegmentsByHeadModel(T, usable, first, opt_.headModel);
   const HeadJoinAll<Scalar>& J = R.join;
   if (opt_.log) {
@@ -110,28 +127,32 @@ bool MonoSlam<Scalar>::joinAllSegmentsByHead(bool placeShort) {
   }
   if (!R.ok) return false;
   const std::vector<int>& groupOf = R.group;
-  // Segment by segment, in order: transformFrom moves everything from a segment on, so each
-  // joined segment gets its own similarity composed with the inverse of the one applied so far.
-  Scalar a = Scalar(1);
-  V3 b = V3::Zero();
+  // Segment by segment, in order: transformFrom moves a segment with the ones started from it,
+  // so each joined segment gets its own similarity composed with the inverse of the one applied
+  // to the segment it was started from (x ↦ a·x + b); one left out keeps that one.
+  std::vector<Scalar> a(segmentParent_.size(), Scalar(1));
+  std::vector<V3> b(segmentParent_.size(), V3::Zero());
   for (std::size_t i = 0; i < S; ++i) {
+    const std::size_t sg = static_cast<std::size_t>(segOf[i]);
+    const int parent = segmentParent_[sg];
+    const Scalar ap = parent >= 0 ? a[static_cast<std::size_t>(parent)] : Scalar(1);
+    const V3 bp = parent >= 0 ? b[static_cast<std::size_t>(parent)] : V3::Zero();
+    a[sg] = ap, b[sg] = bp;
     if (groupOf[i] < 0) continue;
     const Scalar s = J.s[static_cast<std::size_t>(groupOf[i])];
     const V3 t = J.t[static_cast<std::size_t>(groupOf[i])];
-    transformFrom(first[i], keyframes_[static_cast<std::size_t>(segFirstKf[i])].segment,
-                  [&](const V3& x) { return V3(s * (x - b) / a + t); });
-    a = s;
-    b = t;
+    transformFrom(first[i], segOf[i], [&](const V3& x) { return V3(s * (x - bp) / ap + t); });
+    a[sg] = s, b[sg] = t;
   }
   // A segment too short to fix its own scale: its frames are placed by the head model instead
   // (fillGapsByHeadModel), like lost ones.
   if (opt_.join.placeShort && placeShort) {
     for (std::size_t i = 0; i < S; ++i) {
       if (groupOf[i] >= 0) continue;
-      placedRanges_.emplace_back(first[i], first[i + 1]);
+      placedRanges_.push_back({first[i], first[i + 1], segOf[i]});
       for (int f = first[i]; f < first[i + 1]; ++f) {
         Frame& fr = frames_[static_cast<std::size_t>(f)];
-        if (!fr.posed) continue;
+        if (!fr.posed || fr.segment != segOf[i]) continue;
         fr.posed = false;
         fr.rotationKnown = true;
         fr.status = SlamStatus::Interpolated;

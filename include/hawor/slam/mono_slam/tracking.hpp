@@ -126,7 +126,8 @@ void MonoSlam<Scalar>::trackPose(int f) {
     state_ = State::Initialising;
     afterLoss_ = true;
     ++resets_;
-    ++segment_;
+    segmentParent_.push_back(segment_);
+    segment_ = static_cast<int>(segmentParent_.size()) - 1;
     segmentStart_ = f;
     // The tracks go on, under new ids: their old observations keep mapping to the old points.
     for (Track& t : tracks_) {
