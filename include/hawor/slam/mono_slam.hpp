@@ -386,6 +386,7 @@ class MonoSlam {
 
   // relocalisation and place search (mono_slam/relocalisation.hpp)
   bool relocalise(int f);
+  int undoReset(int f);
   void searchMapPoints(int f, const std::vector<KeyframePyramid>& store, const SE3T& pose,
       Scalar maxShiftPx, int maxPoints, const char* what, const std::vector<char>* use = nullptr);
   void searchRevisits(int f);

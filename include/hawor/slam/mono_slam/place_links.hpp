@@ -189,11 +189,7 @@ bool MonoSlam<Scalar>::relocaliseByPlace(int f) {
     trackPoint_[static_cast<std::size_t>(t.id)] = pr.second;
   }
   // The reset built no map: undone; the frames since it stay in the lost segment's world.
-  const int lostSeg = keyframes_.back().segment;
-  --resets_;
-  for (int g = segmentStart_; g < f; ++g) frames_[static_cast<std::size_t>(g)].segment = lostSeg;
-  for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
-  for (Track& t : tracks_) t.fromRef = false;
+  const int lostSeg = undoReset(f);
   // The frame before, posed by the PnP it agreed with, is in the new world too: the next frame's
   // motion prediction (the last step carried on) must not span two worlds.
   Frame& pr = frames_[static_cast<std::size_t>(f - 1)];
@@ -210,7 +206,6 @@ bool MonoSlam<Scalar>::relocaliseByPlace(int f) {
     lastKfPyr_ = KeyframePyramid();
   }
   segment_ = seg;
-  state_ = State::Tracking;
   afterLoss_ = false;
   lost_ = 0;
   placeCandFrame_ = -1;

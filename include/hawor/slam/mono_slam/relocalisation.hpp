@@ -71,20 +71,26 @@ bool MonoSlam<Scalar>::relocalise(int f) {
   fr.inliers = r.numInliers;
   fr.status = SlamStatus::Relocalised;
   dropOutlierTracks(ti, r.inliers);
-  if (state_ == State::Initialising) {
-    // The reset built no map: the old segment goes on.
-    --resets_;
-    segment_ = keyframes_.back().segment;
-    for (int g = segmentStart_; g < f; ++g) frames_[static_cast<std::size_t>(g)].segment = segment_;
-    for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
-    for (Track& t : tracks_) t.fromRef = false;
-    state_ = State::Tracking;
-  }
+  if (state_ == State::Initialising) undoReset(f);  // the old segment goes on
   afterLoss_ = false;
   lost_ = 0;
   ++relocalisations_;
   insertKeyframe(f);
   return true;
+}
+
+/// Frame f put back into a map before the reset built one: the reset is undone. The segment is
+/// the lost one again (the last keyframe's), and so are the frames since the reset; their masks
+/// kept for the initialisation go. Returns that segment.
+template <typename Scalar>
+int MonoSlam<Scalar>::undoReset(int f) {
+  --resets_;
+  segment_ = keyframes_.back().segment;
+  for (int g = segmentStart_; g < f; ++g) frames_[static_cast<std::size_t>(g)].segment = segment_;
+  for (int g = std::max(0, std::min(segmentStart_, refFrame_)); g <= f; ++g) frames_[static_cast<std::size_t>(g)].mask = CoarseMask();
+  for (Track& t : tracks_) t.fromRef = false;
+  state_ = State::Tracking;
+  return segment_;
 }
 
 /// Map points of the keyframe pyramids `store` (newest first) that no live track follows,
