@@ -11,7 +11,7 @@
 //      (people hold their heads with little roll: |x_t·n| ≤ sin maxRollDeg for most frames) and
 //      within 90° of their up axes (−y_t·n > 0). Among those the one with most inliers gives u.
 //   2. Levels. The points' heights y_i = u·p_i; a level is a cluster of ≥ minLevelPoints heights
-//      below the cameras (a peak of their histogram, bin width tol, 3× above the points around,
+//      below the cameras' 10th-percentile height (a peak of their histogram, bin width tol, 3× above the points around,
 //      with at least minLevelFraction of the best level's support).
 //      The floor is the lowest level; its plane is refitted to the points within ±tol of it
 //      (least squares: the normal is the smallest principal axis), which also refines u.
@@ -213,9 +213,12 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   std::vector<std::pair<Scalar, int>> levels;  // (height, support), ascending
   std::vector<V3> floorLevelPts;
   for (int pass = 0; pass < 2; ++pass) {
-    std::vector<Scalar> camY;
-    for (const auto& c : centres) camY.push_back(up.dot(c));
-    const Scalar camLow = *std::min_element(camY.begin(), camY.end());
+    // The cameras' height band: the 10th to 90th percentile of their heights, not the extremes,
+    // so that a few wild poses (a segment the SLAM could not join, far below the rest) do not
+    // move every surface "above the cameras".
+    std::vector<double> camY;
+    for (const auto& c : centres) camY.push_back(double(up.dot(c)));
+    const Scalar camLow = Scalar(percentile(camY, 0.1)), camHigh = Scalar(percentile(camY, 0.9));
     // Levels from a histogram of bin width tol over all the points' heights (a level must be a
     // peak among its neighbours, also those at and above the cameras, so that the points' density
     // falling off below the cameras is no level): the support of bin b is the count of bins
@@ -223,7 +226,6 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
     // more-supported bin within two bins (ties go to the lower), at the mean height of its window,
     // lower than the cameras by tol. Heights further than 20 scene distances from the cameras are
     // wild points, not surfaces.
-    const Scalar camHigh = *std::max_element(camY.begin(), camY.end());
     const Scalar reach = Scalar(20) * tol / opt.inlierFraction;
     std::vector<Scalar> y;
     for (const auto& p : P) {
