@@ -10,7 +10,7 @@
 //
 //   node examples/bench_real.mjs [--video CLIP] [--labels JSON] [--work DIR] [--json OUT]
 //        [--variants a,b,c] [--jobs N] [--threads N] [--reuse-runs] [--hawor BIN] [--core FILE]
-//        [--colmap-threads N] [--colmap-camera radial|fixed] [--list] [--make-only]
+//        [--colmap-threads N] [--colmap-camera radial|fixed] [--passes N] [--list] [--make-only]
 //
 // Dependencies: Debian's ffmpeg (as the CLI), the native tool (build/native/examples/hawor, for
 // `hawor metrics camera`) and, for the camera reference, Debian's COLMAP 3.8: `apt-get install -y
@@ -93,6 +93,15 @@
 //
 // Targets (measured here, not enforced): recall >= 0.85 on every variant, false positives <= 1
 // in 6 labelled-absent hand-frames, ATE <= 2 % of the path on each segment.
+//
+// --passes N: also each variant played as one clip of N passes, forward and backward in turn (the
+// wearer going back and forth over the same places; a turning point's frame shown once; made by
+// ffmpeg from the variant's file, CRF 18), through the same pipeline. A second table compares it
+// with the variant's single pass: the metric scale (cue, confidence), each pass's metric camera
+// path against the single pass's (median ratio, and the largest over the smallest pass), ATE per
+// segment with every showing of a frame scored against its COLMAP pose (one Sim(3) per segment
+// over all passes), the lost frames. Targets: passes at one scale (0.8-1.25x of each other and
+// of the single pass), confidence no lower than the single pass's.
 
 import { spawn, spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, readdirSync, rmSync, writeFileSync, statSync } from 'node:fs';
@@ -165,6 +174,34 @@ function makeVariant(name, v, video, dir) {
     seconds = (performance.now() - t0) / 1000;
   }
   return { file, made: seconds > 0, seconds, ...ffprobe(file) };
+}
+
+/** Makes (or reuses) the variant's clip of `passes` passes (passOrder) from its file. */
+function makePasses(name, made, passes, dir) {
+  const file = join(dir, `${name}_x${passes}.mp4`);
+  const n = made.frames;
+  let seconds = 0;
+  if (!existsSync(file)) {
+    // pass p: frames 0..n-1 (p = 0), then n-2..0 (odd p: all but the last, reversed), 1..n-1 (even)
+    const parts = [];
+    for (let p = 0; p < passes; ++p) {
+      const trim = p === 0 ? 'trim=start_frame=0' : p % 2 ? `trim=end_frame=${n - 1},reverse` : 'trim=start_frame=1';
+      parts.push(`[s${p}]${trim},setpts=PTS-STARTPTS[p${p}]`);
+    }
+    const graph = `[0:v]split=${passes}${Array.from({ length: passes }, (_, p) => `[s${p}]`).join('')};${parts.join(';')};` +
+      `${Array.from({ length: passes }, (_, p) => `[p${p}]`).join('')}concat=n=${passes}:v=1[v]`;
+    const tmp = join(dir, `${name}_x${passes}.part.mp4`);
+    const t0 = performance.now();
+    const r = spawnSync('nice', ['-n', '10', 'ffmpeg', '-v', 'error', '-y', '-nostdin', '-i', made.file, '-an', '-filter_complex', graph,
+      '-map', '[v]', '-r', String(made.fps), ...X264, ...q18, tmp], { encoding: 'utf8', maxBuffer: 1 << 24 });
+    if (r.status !== 0) throw new Error(`ffmpeg for ${name} x${passes} failed: ${r.stderr.trim().split('\n').slice(-3).join(' | ')}`);
+    spawnSync('mv', [tmp, file]);
+    seconds = (performance.now() - t0) / 1000;
+  }
+  const p = ffprobe(file);
+  const expect = passes * (n - 1) + 1;
+  if (p.frames !== expect) throw new Error(`${file}: ${p.frames} frames, expected ${expect} (${passes} passes of ${n})`);
+  return { file, made: seconds > 0, seconds, ...p };
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -422,6 +459,45 @@ export function scoreCamera(res, v, segs, n0, dir, hawor, order = null) {
   return out;
 }
 
+/** The recorded frame shown at each frame of a clip of `passes` passes over n frames, forward and
+ *  backward in turn (a turning point's frame shown once), and the pass of each. */
+export function passOrder(n, passes) {
+  const order = [];
+  const pass = [];
+  for (let p = 0; p < passes; ++p) {
+    for (let j = p === 0 ? 0 : 1; j < n; ++j) {
+      order.push(p % 2 === 0 ? j : n - 1 - j);
+      pass.push(p);
+    }
+  }
+  return { order, pass };
+}
+
+/** Per segment: the largest over the smallest of the passes' estimated path lengths over the
+ *  segment's frames (passes with at least 10 of them). */
+export function passScaleSpread(positions, order, pass, v, segs, n0) {
+  const out = {};
+  for (const seg of segs) {
+    const inSeg = new Set(seg.poses.map((p) => p.frame));
+    const len = new Map();
+    const cnt = new Map();
+    let prev = -1;
+    for (let i = 0; i < order.length; ++i) {
+      if (!inSeg.has(origFrame(v, order[i], n0))) { prev = -1; continue; }
+      const p = pass[i];
+      cnt.set(p, (cnt.get(p) ?? 0) + 1);
+      if (prev >= 0 && pass[prev] === p) {
+        const d = Math.hypot(positions[3 * i] - positions[3 * prev], positions[3 * i + 1] - positions[3 * prev + 1], positions[3 * i + 2] - positions[3 * prev + 2]);
+        len.set(p, (len.get(p) ?? 0) + d);
+      }
+      prev = i;
+    }
+    const L = [...cnt.keys()].filter((p) => cnt.get(p) >= 10).map((p) => len.get(p) ?? 0);
+    out[seg.name] = L.length >= 2 ? Math.max(...L) / Math.max(Math.min(...L), 1e-12) : null;
+  }
+  return out;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Runs
 // ---------------------------------------------------------------------------------------------
@@ -485,6 +561,7 @@ function parse(argv) {
     else if (a === '--colmap') o.colmap = v();
     else if (a === '--colmap-threads') o.colmapThreads = Number(v());
     else if (a === '--colmap-camera') { o.colmapCamera = v(); if (!['radial', 'fixed'].includes(o.colmapCamera)) throw new Error('--colmap-camera must be radial or fixed'); }
+    else if (a === '--passes') { o.passes = Number(v()); if (!Number.isInteger(o.passes) || o.passes < 2 || o.passes > 60) throw new Error(`--passes must be an integer from 2 to 60, not '${argv[i]}'`); }
     else if (a === '--list') o.list = true;
     else if (a === '--make-only') o.makeOnly = true;
     else throw new Error(`unknown argument '${a}'`);
@@ -509,6 +586,59 @@ function table(rows, segNames) {
   }
   const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
   return lines.map((l, k) => {
+    const s = l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ');
+    return k === 0 ? `${s}\n${'-'.repeat(s.length)}` : s;
+  }).join('\n');
+}
+
+const medianOf = (a) => { const b = [...a].sort((x, y) => x - y); const m = b.length >> 1; return b.length % 2 ? b[m] : 0.5 * (b[m - 1] + b[m]); };
+
+/** A variant's N-pass run against its single pass (the --passes table's row). */
+function scorePasses(name, n, run, dir, single, segs, n0, o) {
+  const row = { name: `${name} x${o.passes}` };
+  if (run.code !== 0 || !existsSync(join(dir, 'result.json'))) return { ...row, error: `exit ${run.code}: ${run.stderrTail}` };
+  const res = JSON.parse(readFileSync(join(dir, 'result.json'), 'utf8'));
+  const v = VARIANTS[name];
+  const { order, pass } = passOrder(n, o.passes);
+  if (res.frameCount !== order.length) return { ...row, error: `${res.frameCount} frames in result.json, expected ${order.length}` };
+  const camera = scoreCamera(res, v, segs, n0, dir, o.hawor, order);
+  const P = res.camera.positions;
+  const spread = passScaleSpread(P, order, pass, v, segs, n0);
+  for (const s of segs) if (camera[s.name]) camera[s.name].scaleSpread = spread[s.name];
+  const paths = new Array(o.passes).fill(0);
+  for (let i = 1; i < order.length; ++i) {
+    if (pass[i] === pass[i - 1]) paths[pass[i]] += Math.hypot(P[3 * i] - P[3 * i - 3], P[3 * i + 1] - P[3 * i - 2], P[3 * i + 2] - P[3 * i - 1]);
+  }
+  const st = res.camera.status;
+  const ok = single && !single.error;
+  const ratio = ok && single.pathMetres > 0 ? medianOf(paths) / single.pathMetres : null;
+  const passSpread = Math.max(...paths) / Math.max(Math.min(...paths), 1e-12);
+  const fails = [];
+  if (!(ratio >= 0.8 && ratio <= 1.25)) fails.push('ratio');
+  if (!(passSpread <= 1.25)) fails.push('spread');
+  if (!(ok && res.scale.confidence >= single.scale.confidence)) fails.push('confidence');
+  return {
+    ...row, frames: res.frameCount, passes: o.passes, camera, pathsMetres: paths, singlePathMetres: ok ? single.pathMetres : null, ratio, passSpread,
+    scale: { scale: res.scale.scale, method: res.scale.method, confidence: res.scale.confidence, ambiguous: !!res.scale.ground?.ambiguous },
+    single: ok ? { scale: single.scale, lost: single.slam.lost, frames: single.frames } : null,
+    lost: st.filter((s) => s === 2).length, slam: res.slam, msPerFrame: run.summary?.msPerFrame ?? null, wallSeconds: run.wall, warnings: res.warnings, fails,
+  };
+}
+
+function passTable(rows, segNames, passes) {
+  const head = ['variant', 'frames', 'scale single', 'scale xN', 'path m', 'pass m', 'ratio', 'spread', ...segNames.map((s) => `ATE % ${s}`),
+    ...segNames.map((s) => `scale x ${s}`), 'lost % single / xN', 'ms/frame', 'fails'];
+  const cue = (sc) => `${sc.method}${sc.ambiguous ? '?' : ''} ${f2(sc.confidence)}`;
+  const lines = [head];
+  for (const r of rows) {
+    if (r.error) { lines.push([r.name, `error: ${r.error}`]); continue; }
+    lines.push([r.name, String(r.frames), r.single ? cue(r.single.scale) : '-', cue(r.scale), f2(r.singlePathMetres),
+      `${f2(medianOf(r.pathsMetres))} (${f2(Math.min(...r.pathsMetres))}-${f2(Math.max(...r.pathsMetres))})`, f2(r.ratio), f2(r.passSpread),
+      ...segNames.map((s) => f2(r.camera[s]?.atePct)), ...segNames.map((s) => f2(r.camera[s]?.scaleSpread)),
+      `${r.single ? f2((100 * r.single.lost) / r.single.frames, 0) : '-'} / ${f2((100 * r.lost) / r.frames, 0)}`, f2(r.msPerFrame, 0), r.fails.join(' ') || '-']);
+  }
+  const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
+  return `${passes} passes\n` + lines.map((l, k) => {
     const s = l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ');
     return k === 0 ? `${s}\n${'-'.repeat(s.length)}` : s;
   }).join('\n');
@@ -619,10 +749,30 @@ async function main(argv) {
   process.stdout.write('recall L / R: the wearer\'s hands; FP: detections on labelled-absent hand-frames / those hand-frames; ATE in % of COLMAP\'s path per segment ("held N": the camera never moved there, N = the scale-0 error); rot: mean rotation error; init: the original frame of the first tracked pose; lost: frames the SLAM lost; path m: the metric camera path (not judged: COLMAP has no metric scale); ms/frame: the CLI\'s, without loading\n');
   process.stdout.write('targets: recall >= 0.85 (both hands together), FP <= 1/6, ATE <= 2 % on each segment; fails lists the missed ones\n');
   process.stdout.write(`time: variants ${f2(timing.variants, 0)} s, COLMAP ${ref.cached ? `cached (made in ${f2(ref.seconds.total, 0)} s)` : `${f2(timing.colmap, 0)} s`}, runs ${f2(timing.runs, 0)} s, total ${f2(timing.total, 0)} s; load average at the end ${load}\n`);
+  let passRows = null;
+  if (o.passes) {
+    t = performance.now();
+    const pmade = {};
+    for (const n of o.variants) pmade[n] = makePasses(n, made[n], o.passes, join(o.work, 'variants'));
+    const pruns = await pool(o.variants, o.jobs, async (n) => {
+      const dir = join(o.work, 'runs', `${n}_x${o.passes}`);
+      if (o.reuse && existsSync(join(dir, 'result.json')) && existsSync(join(dir, 'run.json'))) return JSON.parse(readFileSync(join(dir, 'run.json'), 'utf8'));
+      process.stderr.write(`bench_real: running ${n} x${o.passes}...\n`);
+      const r = await runPipelineCli(pmade[n].file, dir, o);
+      writeFileSync(join(dir, 'run.json'), JSON.stringify(r));
+      process.stderr.write(`bench_real: ${n} x${o.passes} done in ${r.wall.toFixed(1)} s (exit ${r.code})\n`);
+      return r;
+    });
+    passRows = o.variants.map((n, k) => scorePasses(n, made[n].frames, pruns[k], join(o.work, 'runs', `${n}_x${o.passes}`), rows.find((r) => r.name === n), segs, n0, o));
+    timing.passes = (performance.now() - t) / 1000;
+    process.stdout.write(`\n${passTable(passRows, segNames, o.passes)}\n`);
+    process.stdout.write(`single / xN: the variant's one pass / its ${o.passes}-pass clip; scale: the cue and its confidence; path m: the single pass's metric camera path; pass m: the passes' (median, min-max); ratio: their median over the single pass's; spread: the largest pass over the smallest; ATE % per segment over every showing (one Sim(3)); scale x: per segment, the largest pass over the smallest\n`);
+    process.stdout.write(`targets: ratio and spread within 0.8-1.25, confidence of the passes >= the single pass's; time ${f2(timing.passes, 0)} s\n`);
+  }
   if (o.json) {
     const json = { video: o.video, labels: o.labels, work: o.work, jobs: o.jobs, threads: o.threads, timing, loadAverageEnd: load,
       colmap: { ...ref, models: ref.models.map((m) => ({ ...m, poses: undefined })) },
-      segments: segs.map((s) => ({ ...s, poses: undefined })), variants: rows };
+      segments: segs.map((s) => ({ ...s, poses: undefined })), variants: rows, passes: passRows };
     writeFileSync(o.json, `${JSON.stringify(json, null, 1)}\n`);
   }
   return 0;

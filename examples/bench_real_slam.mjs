@@ -22,8 +22,8 @@
 //               same places, N x 4 s. Every showing of a frame is scored against the same COLMAP
 //               pose with one Sim(3) per segment over all passes (ATE in % of one pass's path), and
 //               'scale x' is the largest over the smallest of the passes' path lengths in a
-//               segment (1: every pass at one scale). Native runs only; no --readout (the rows'
-//               order flips at each turning point).
+//               segment (1: every pass at one scale). No --readout (the rows' order flips at
+//               each turning point).
 //
 // --work DIR    bench_real's work folder (default $TMPDIR/hawor_bench_real): its variants/ and
 //               colmap/reference.json are used (run bench_real.mjs --make-only once, and COLMAP
@@ -47,7 +47,7 @@ import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { deflateSync, inflateSync } from 'node:zlib';
 
-import { VARIANTS, origFrame, segmentsOf, scoreCamera, pool } from './bench_real.mjs';
+import { VARIANTS, origFrame, segmentsOf, scoreCamera, pool, passOrder, passScaleSpread } from './bench_real.mjs';
 import { crc32 } from '../web/tools/npz.mjs';
 
 const repo = resolve(dirname(fileURLToPath(import.meta.url)), '..');
@@ -171,20 +171,6 @@ function reversedInputs(dir, meta) {
   return rdir;
 }
 
-/** The recorded frame shown at each frame of a clip of `passes` passes over n frames, forward and
- *  backward in turn (a turning point's frame shown once), and the pass of each. */
-export function passOrder(n, passes) {
-  const order = [];
-  const pass = [];
-  for (let p = 0; p < passes; ++p) {
-    for (let j = p === 0 ? 0 : 1; j < n; ++j) {
-      order.push(p % 2 === 0 ? j : n - 1 - j);
-      pass.push(p);
-    }
-  }
-  return { order, pass };
-}
-
 /** The recorded inputs as a clip of `passes` passes (passOrder), as links in DIR/passes_N/. */
 function passesInputs(dir, meta, passes) {
   const pdir = join(dir, `passes_${passes}`);
@@ -200,31 +186,6 @@ function passesInputs(dir, meta, passes) {
   }
   writeFileSync(join(pdir, 'done'), '');
   return pdir;
-}
-
-/** Per segment: the largest over the smallest of the passes' estimated path lengths over the
- *  segment's frames (passes with at least 10 of them). */
-function passScaleSpread(positions, order, pass, v, segs, n0) {
-  const out = {};
-  for (const seg of segs) {
-    const inSeg = new Set(seg.poses.map((p) => p.frame));
-    const len = new Map();
-    const cnt = new Map();
-    let prev = -1;
-    for (let i = 0; i < order.length; ++i) {
-      if (!inSeg.has(origFrame(v, order[i], n0))) { prev = -1; continue; }
-      const p = pass[i];
-      cnt.set(p, (cnt.get(p) ?? 0) + 1);
-      if (prev >= 0 && pass[prev] === p) {
-        const d = Math.hypot(positions[3 * i] - positions[3 * prev], positions[3 * i + 1] - positions[3 * prev + 1], positions[3 * i + 2] - positions[3 * prev + 2]);
-        len.set(p, (len.get(p) ?? 0) + d);
-      }
-      prev = i;
-    }
-    const L = [...cnt.keys()].filter((p) => cnt.get(p) >= 10).map((p) => len.get(p) ?? 0);
-    out[seg.name] = L.length >= 2 ? Math.max(...L) / Math.max(Math.min(...L), 1e-12) : null;
-  }
-  return out;
 }
 
 /** The extra flags for a reversed run: --readout negated. */
@@ -269,18 +230,22 @@ function runSlam(o, dir, meta, extra, reversed = false, passes = 0) {
 
 /** The same run through the WebAssembly core's MonoSlam (the product's build) in this process:
  *  { code, summary, tum rows, status }. */
-async function runSlamWasm(o, dir, meta, reversed = false) {
+async function runSlamWasm(o, dir, meta, reversed = false, passes = 0) {
   const { loadCore } = await import('../web/src/core.mjs');
   const core = await loadCore({ path: o.core });
-  const out = join(dir, reversed ? 'out_reversed' : 'out');
+  const out = join(dir, passes ? `out_passes_${passes}` : reversed ? 'out_reversed' : 'out');
   rmSync(out, { recursive: true, force: true });
   mkdirSync(out, { recursive: true });
+  const order = passes ? passOrder(meta.frames, passes).order : Array.from({ length: meta.frames }, (_, j) => (reversed ? meta.frames - 1 - j : j));
   const options = { ...meta.options };
+  // the extra flags `--set NAME=VALUE,...` (repeatable) and `--verbose` (the log on stderr), as hawor slam takes them
+  const sets = o.extra.flatMap((a, i) => (o.extra[i - 1] === '--set' ? [a] : a.startsWith('--set=') ? [a.slice(6)] : []));
+  if (sets.length) options.set = sets.join(',');
+  if (o.extra.includes('--verbose')) options.log = true;
   if (reversed && options.rollingShutter) options.rollingShutter = -options.rollingShutter;
   const slam = new core.MonoSlam(meta.intrinsics, meta.width, meta.height, options);
   const ms = [];
-  for (let j = 0; j < meta.frames; ++j) {
-    const i = reversed ? meta.frames - 1 - j : j;
+  for (const i of order) {
     const name = `${String(i).padStart(6, '0')}.png`;
     const f = readOwnPng(readFileSync(join(dir, 'frames', name)));
     const mp = join(dir, 'masks', name);
@@ -294,13 +259,13 @@ async function runSlamWasm(o, dir, meta, reversed = false) {
   const q = core.rotationsToQuaternions(r.rotations);
   const fps = meta.fps ?? 30;
   const rows = [];
-  for (let i = 0; i < meta.frames; ++i) rows.push([i / fps, r.translations[3 * i], r.translations[3 * i + 1], r.translations[3 * i + 2], q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]]);
+  for (let i = 0; i < order.length; ++i) rows.push([i / fps, r.translations[3 * i], r.translations[3 * i + 1], r.translations[3 * i + 2], q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]]);
   writeFileSync(join(out, 'camera.tum'), rows.map((x) => x.join(' ')).join('\n') + '\n');
   const names = ['tracked', 'interpolated', 'lost', 'relocalised'];
   writeFileSync(join(out, 'stats.json'), JSON.stringify({ status: Array.from(r.status, (s) => names[s]) }));
   if (reversed) unreverseOutputs(out, fps);
   ms.sort((a, b) => a - b);
-  return { code: 0, summary: { resets: r.numResets, median_ms_per_frame: ms[Math.floor(ms.length / 2)] } };
+  return { code: 0, summary: { resets: r.numResets, place_links: r.numPlaceLinks, placed_segments: r.numPlacedSegments, median_ms_per_frame: ms[Math.floor(ms.length / 2)] } };
 }
 
 const STATUS = { tracked: 0, interpolated: 1, lost: 2, relocalised: 3 };
@@ -326,7 +291,6 @@ function parse(argv) {
     else if (a === '--playback') { o.playback = v(); if (!['forward', 'reverse', 'both'].includes(o.playback)) throw new Error(`--playback must be forward, reverse or both, not '${o.playback}'`); }
     else throw new Error(`unknown argument '${a}'`);
   }
-  if (o.passes && o.core) throw new Error('--passes runs the native hawor only (not --core)');
   if (o.passes && o.extra.some((a) => a.startsWith('--readout'))) throw new Error('--passes cannot take --readout: the rows\' order flips at every turning point');
   for (const n of o.variants) if (!VARIANTS[n]) throw new Error(`unknown variant '${n}' (known: ${Object.keys(VARIANTS).join(', ')})`);
   return o;
@@ -361,7 +325,7 @@ async function main(argv) {
     const out = join(dir, o.passes ? `out_passes_${o.passes}` : reversed ? 'out_reversed' : 'out');
     const name = o.passes ? `${n} (x${o.passes})` : reversed ? `${n} (rev)` : n;
     const meta = JSON.parse(readFileSync(join(dir, 'slam.json'), 'utf8'));
-    const run = o.core ? await runSlamWasm(o, dir, meta, reversed) : await runSlam(o, dir, meta, o.extra, reversed, o.passes ?? 0);
+    const run = o.core ? await runSlamWasm(o, dir, meta, reversed, o.passes ?? 0) : await runSlam(o, dir, meta, o.extra, reversed, o.passes ?? 0);
     if (run.code !== 0) return { name, reversed, error: `exit ${run.code}: ${run.stderrTail}` };
     const stats = JSON.parse(readFileSync(join(out, 'stats.json'), 'utf8'));
     const tum = readTum(readFileSync(join(out, 'camera.tum'), 'utf8'));

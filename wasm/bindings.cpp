@@ -16,7 +16,7 @@
 //       the next frame's warm start; reset() forgets it (track lost); hasPrevious().
 //   renderHandMasks(width, height, intrinsics, hands: [{model, rot, handPose, betas, trans,
 //       value?}], dilatePx) -> Uint8Array(width*height)
-//   new MonoSlam(intrinsics, width, height, {useMasks?, refineFocal?, focalPriorSigma?, focalPriorFx?, rollingShutter?}) .process(frame: Uint8Array(W*H*c),
+//   new MonoSlam(intrinsics, width, height, {useMasks?, refineFocal?, focalPriorSigma?, focalPriorFx?, rollingShutter?, set?, log?}) .process(frame: Uint8Array(W*H*c),
 //       c = 1 grey, 3 RGB or 4 RGBA; mask: Uint8Array(W*H), hand != 0, or null) -> status; .finish() -> {rotations (9T, row-major R_c2w),
 //       translations (3T), status: Uint8Array(T) (0 tracked, 1 interpolated, 2 lost,
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
@@ -67,6 +67,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -87,6 +88,7 @@
 #include "hawor/render/rectify.hpp"
 #include "hawor/render/resample.hpp"
 #include "hawor/slam/mono_slam.hpp"
+#include "hawor/slam/slam_option_table.hpp"
 
 using emscripten::val;
 
@@ -450,6 +452,13 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
       opt.focal.priorFx = options["focalPriorFx"].as<double>();
       if (!(opt.focal.priorFx > 0) || !std::isfinite(opt.focal.priorFx)) throw hawor::Error("focalPriorFx must be finite and > 0");
     }
+    // set: "NAME=VALUE,..." over any SlamOptions field (as `hawor slam --set`), for ablations
+    // of the product's build; log: the SLAM's decisions line by line on stderr (the console).
+    if (!absent(options) && !absent(options["set"])) hawor::setSlamOptions(opt, options["set"].as<std::string>());
+    if (!absent(options) && !absent(options["log"]) && options["log"].as<bool>()) {
+      opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };
+    }
+    opt.validate();
     return new MonoSlam(camera(intrinsics, width, height), opt);
   });
 }
