@@ -22,15 +22,13 @@ const skip = !existsSync(corePath) ? `${corePath} missing (cmake --build build/w
   : !existsSync(haworBin) ? `${haworBin} missing (cmake --build build/native --target hawor_cli)`
     : !hasFfmpeg ? 'ffmpeg is not installed' : false;
 
-/** The PNG frames of DIR as raw bytes (ffmpeg, lossless): one Uint8Array of w*h*channels each. */
-function decodePngs(dir, names, w, h, pixFmt, channels) {
-  const out = [];
-  for (const n of names) {
-    const raw = execFileSync('ffmpeg', ['-v', 'error', '-i', join(dir, n), '-f', 'rawvideo', '-pix_fmt', pixFmt, '-'], { maxBuffer: 1 << 26 });
-    assert.equal(raw.length, w * h * channels, `${n}: ${raw.length} bytes`);
-    out.push(new Uint8Array(raw.buffer, raw.byteOffset, raw.length));
-  }
-  return out;
+/** The PNG frames of DIR, numbered without gaps (%06d.png), as raw bytes in one ffmpeg run
+ *  (lossless): n Uint8Arrays of w*h*channels. */
+function decodePngs(dir, n, w, h, pixFmt, channels) {
+  const raw = execFileSync('ffmpeg', ['-v', 'error', '-i', join(dir, '%06d.png'), '-f', 'rawvideo', '-pix_fmt', pixFmt, '-'], { maxBuffer: 1 << 28 });
+  const size = w * h * channels;
+  assert.equal(raw.length, n * size, `${dir}: ${raw.length} bytes, expected ${n} frames of ${size}`);
+  return Array.from({ length: n }, (_, i) => new Uint8Array(raw.buffer, raw.byteOffset + i * size, size));
 }
 
 /** Native `hawor slam` and the core's MonoSlam on the PNG frames (and masks) of DIR; returns
@@ -43,15 +41,12 @@ async function nativeAndCore(frames, masksDir, K, W, H, work) {
   const native = readFileSync(join(work, 'native.tum'), 'utf8').trim().split('\n').filter((l) => !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
   const nativeStatus = JSON.parse(readFileSync(join(work, 'native.json'), 'utf8')).status;
   const names = readdirSync(frames).filter((n) => n.endsWith('.png')).sort();
-  const masks = new Set(masksDir ? readdirSync(masksDir) : []);
-  const rgb = decodePngs(frames, names, W, H, 'rgb24', 3);
+  const rgb = decodePngs(frames, names.length, W, H, 'rgb24', 3);
+  const masks = masksDir ? decodePngs(masksDir, names.length, W, H, 'gray', 1) : null;  // one per frame
   const { loadCore } = await import('../../web/src/core.mjs');
   const core = await loadCore({ path: corePath });
   const slam = new core.MonoSlam(K, W, H, { useMasks: !!masksDir });
-  names.forEach((n, i) => {
-    const mask = masks.has(n) ? decodePngs(masksDir, [n], W, H, 'gray', 1)[0] : null;
-    slam.process(rgb[i], mask);
-  });
+  rgb.forEach((frame, i) => slam.process(frame, masks ? masks[i] : null));
   const res = slam.finish();
   slam.delete();
   assert.equal(native.length, names.length);
