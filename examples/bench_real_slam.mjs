@@ -35,11 +35,11 @@
 //               to NAME/out/.
 // The SLAM runs as the pipeline's first pass does (masks, --refine-focal, the focal prior the
 // pipeline gave); the pipeline's further passes with a refined focal are not repeated (the focal
-// was refined on none of the variants). Native and WebAssembly builds of the same code differ in
-// the last bits of their arithmetic, and the front end's choices amplify that (a variant may
-// initialise 40 frames apart), so --core FILE runs the WebAssembly core's MonoSlam on the same
-// inputs in this process instead (the product's build; $HAWOR_CORE is used for recording only).
-// `hawor metrics camera` (--hawor) scores both.
+// was refined on none of the variants). --core FILE runs the WebAssembly core's MonoSlam on the
+// same inputs in this process instead (the product's build; $HAWOR_CORE is used for recording
+// only); the two builds differ only in the last bits of their arithmetic and give the same table
+// (tests/web/slam_native_wasm.test.mjs holds them to it). `hawor metrics camera` (--hawor) scores
+// both.
 import { spawn, spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, readdirSync, rmSync, symlinkSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
