@@ -572,6 +572,16 @@ function parse(argv) {
 
 const f2 = (x, d = 2) => (x === null || x === undefined || !Number.isFinite(x) ? '-' : x.toFixed(d));
 
+/** Rows of cells as aligned text: the first column left-aligned, the rest right-aligned, a rule
+ *  under the first row (the header). */
+function formatTable(lines) {
+  const w = lines[0].map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
+  return lines.map((l, k) => {
+    const s = l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ');
+    return k === 0 ? `${s}\n${'-'.repeat(s.length)}` : s;
+  }).join('\n');
+}
+
 function table(rows, segNames) {
   const head = ['variant', 'size', 'fps', 'frames', 'recall L', 'recall R', 'recall', 'FP', ...segNames.map((s) => `ATE % ${s}`),
     ...segNames.map((s) => `rot ° ${s}`), 'init', 'lost', 'path m', 'ms/frame', 'fails'];
@@ -584,11 +594,7 @@ function table(rows, segNames) {
       ...segNames.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)),
       String(r.slam.firstTrackedOriginalFrame ?? '-'), String(r.slam.lost), f2(r.pathMetres), f2(r.msPerFrame, 0), r.fails.join(' ') || '-']);
   }
-  const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
-  return lines.map((l, k) => {
-    const s = l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ');
-    return k === 0 ? `${s}\n${'-'.repeat(s.length)}` : s;
-  }).join('\n');
+  return formatTable(lines);
 }
 
 const medianOf = (a) => { const b = [...a].sort((x, y) => x - y); const m = b.length >> 1; return b.length % 2 ? b[m] : 0.5 * (b[m - 1] + b[m]); };
@@ -637,11 +643,7 @@ function passTable(rows, segNames, passes) {
       ...segNames.map((s) => f2(r.camera[s]?.atePct)), ...segNames.map((s) => f2(r.camera[s]?.scaleSpread)),
       `${r.single ? f2((100 * r.single.lost) / r.single.frames, 0) : '-'} / ${f2((100 * r.lost) / r.frames, 0)}`, f2(r.msPerFrame, 0), r.fails.join(' ') || '-']);
   }
-  const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
-  return `${passes} passes\n` + lines.map((l, k) => {
-    const s = l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ');
-    return k === 0 ? `${s}\n${'-'.repeat(s.length)}` : s;
-  }).join('\n');
+  return `${passes} passes\n${formatTable(lines)}`;
 }
 
 async function main(argv) {

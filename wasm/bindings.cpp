@@ -458,7 +458,6 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
     if (!absent(options) && !absent(options["log"]) && options["log"].as<bool>()) {
       opt.log = [](const std::string& line) { std::fprintf(stderr, "slam: %s\n", line.c_str()); };
     }
-    opt.validate();
     return new MonoSlam(camera(intrinsics, width, height), opt);
   });
 }

@@ -11,8 +11,8 @@
 //      (people hold their heads with little roll: |x_t·n| ≤ sin maxRollDeg for most frames) and
 //      within 90° of their up axes (−y_t·n > 0). Among those the one with most inliers gives u.
 //   2. Levels. The points' heights y_i = u·p_i; a level is a cluster of ≥ minLevelPoints heights
-//      below the cameras' 10th-percentile height (a peak of their histogram, bin width tol, 3× above the points around,
-//      with at least minLevelFraction of the best level's support).
+//      below the cameras' 10th-percentile height (a peak of their histogram, bin width tol, 3×
+//      above the points around, with at least minLevelFraction of the best level's support).
 //      The floor is the lowest level; its plane is refitted to the points within ±tol of it
 //      (least squares: the normal is the smallest principal axis), which also refines u.
 //   3. H = median over frames of u·c_t − floor, α = eyeHeight / H.
