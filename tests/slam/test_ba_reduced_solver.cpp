@@ -1,6 +1,7 @@
 // The reduced camera system's solvers (ba_reduced_solver.hpp): on a random symmetric positive
 // definite block matrix with a sparse block pattern, the dense, sparse and iterative solutions
-// agree with a full-pivoting LU of the assembled matrix; multiply() with the assembled product;
+// agree with a full-pivoting LU of the assembled matrix, and so do conjugate gradients given only
+// S's product; multiply() with the assembled product;
 // a matrix that is not positive definite is refused by each.
 #include <catch2/catch.hpp>
 
@@ -91,6 +92,15 @@ TEMPLATE_TEST_CASE("ReducedCameraSolver: dense, sparse and iterative agree with 
       REQUIRE(solver.solve(sys.S, b, x2));
       CHECK((x2 - x).norm() <= S(tol) * x.norm());
     }
+    // S known only by its product and diagonal blocks (the implicit Schur complement's use)
+    hawor::ReducedCameraSolver<S> implicit(hawor::ReducedSolverMethod::ImplicitSchur, sys.n, sys.keys, sys.diag, S(1e-10), 2000);
+    hawor::VecX<S> xi;
+    REQUIRE(implicit.conjugateGradients([&](int c) -> const typename hawor::ReducedCameraSolver<S>::Block& {
+                                          return sys.S[static_cast<std::size_t>(sys.diag[static_cast<std::size_t>(c)])];
+                                        },
+                                        b, xi, [&](const hawor::VecX<S>& p, hawor::VecX<S>& q) { dense.multiply(sys.S, p, q); }));
+    CHECK((xi.template cast<double>() - ref).norm() <= tol * ref.norm());
+    CHECK_THROWS(implicit.solve(sys.S, b, xi));  // no product given
   }
 }
 

@@ -329,7 +329,8 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
     ref.solve(rp, rx, 300);
     const double costRef = ref.cost(ref.residuals(rp, rx));
 
-    for (BALinearSolver solver : {BALinearSolver::Dense, BALinearSolver::Sparse, BALinearSolver::Iterative}) {
+    for (BALinearSolver solver : {BALinearSolver::Dense, BALinearSolver::Sparse, BALinearSolver::Iterative,
+                                  BALinearSolver::ImplicitSchur}) {
       BAProblem<double> Q = P;
       BAOptions<double> opt = tightOptions(c.loss, c.sigma, c.k);
       opt.maxIterations = 1000;  // IRLS converges linearly in the last digits
@@ -337,12 +338,14 @@ TEST_CASE("bundleAdjust reaches the optimum of a dense Gauss-Newton reference", 
       opt.solver = solver;
       opt.cgTolerance = 1e-12;
       const BAReport<double> rep = bundleAdjust(Q, opt);
-      INFO(c.name << (solver == BALinearSolver::Dense ? " dense" : (solver == BALinearSolver::Sparse ? " sparse" : " iterative"))
+      const char* names[] = {"auto", "dense", "sparse", "iterative", "implicit Schur"};
+      INFO(c.name << " " << names[int(solver)]
                   << ": cost " << rep.initialCost
                   << " -> " << rep.finalCost << " (reference " << costRef << "), iterations "
                   << rep.iterations << ", termination " << int(rep.termination));
       CHECK(rep.sparseSolver == (solver == BALinearSolver::Sparse));
-      CHECK(rep.iterativeSolver == (solver == BALinearSolver::Iterative));
+      CHECK(rep.iterativeSolver == (solver == BALinearSolver::Iterative || solver == BALinearSolver::ImplicitSchur));
+      CHECK(rep.implicitSchur == (solver == BALinearSolver::ImplicitSchur));
       CHECK(std::abs(rep.initialCost - cost0) <= 1e-10 * cost0);  // same cost definition
       CHECK(rep.converged);
       CHECK(rep.finalCost < rep.initialCost);
@@ -525,6 +528,16 @@ TEST_CASE("bundleAdjust: motion-only, no variables, points behind, sparse = dens
     CHECK(ri.converged);
     CHECK(std::abs(ri.finalCost - rd.finalCost) <= 1e-6 * rd.finalCost);
     CHECK(maxPoseDiff(cg.poses, dense.poses) < 1e-5);
+    CHECK_FALSE(ri.implicitSchur);  // a few cameras per point: S is formed
+    // Every pair counted as many (implicitMinPairsPerObservation 0): S applied implicitly, the
+    // same optimum.
+    BAProblem<double> im = s0;
+    oc.implicitMinPairsPerObservation = 0;
+    const auto rm = bundleAdjust(im, oc);
+    CHECK(rm.implicitSchur);
+    CHECK(rm.converged);
+    CHECK(std::abs(rm.finalCost - rd.finalCost) <= 1e-6 * rd.finalCost);
+    CHECK(maxPoseDiff(im.poses, dense.poses) < 1e-5);
   }
 }
 

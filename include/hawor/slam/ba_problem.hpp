@@ -97,7 +97,10 @@ int addFarthestScalePrior(BAProblem<Scalar>& P, int anchor, Scalar w = Scalar(1e
   return farV;
 }
 
-enum class BALinearSolver { Auto, Dense, Sparse, Iterative };
+/// How the reduced camera system S·δ = b is solved (bundle_adjustment.hpp). Iterative: conjugate
+/// gradients on S's stored 6×6 blocks. ImplicitSchur: conjugate gradients on S = H_cc − W·H_pp⁻¹·Wᵀ
+/// applied one point at a time, S never formed (memory linear in the observations).
+enum class BALinearSolver { Auto, Dense, Sparse, Iterative, ImplicitSchur };
 
 enum class BATermination {
   FunctionTolerance,   ///< relative cost decrease of an accepted step ≤ functionTolerance
@@ -124,6 +127,11 @@ struct BAOptions {
   int denseMaxPoses = 60;               ///< Auto: dense reduced system up to this many free poses
   int iterativeMinPoses = 300;          ///< Auto: conjugate gradients from this many free poses…
   int iterativeMinBlocksPerPose = 30;   ///< …with at least this many blocks of S a pose
+  /// Auto, where conjugate gradients are chosen: S applied implicitly when forming it would
+  /// visit more than this many camera pairs per observation (points seen by hundreds of
+  /// cameras, a clip that revisits one place for minutes: S's blocks then grow with the square
+  /// of the observations, the implicit product with the observations).
+  int implicitMinPairsPerObservation = 64;
   Scalar cgTolerance = Scalar(1e-8);    ///< ‖S·δ − b‖ ≤ cgTolerance·‖b‖
   int cgMaxIterations = 500;
   /// Floor D_min of the radial curvature factor of the robust correction (bundle_adjustment.hpp), in (0, 1].
@@ -146,6 +154,7 @@ struct BAReport {
   int freePoses = 0, freePoints = 0;
   bool sparseSolver = false;   ///< the reduced camera system was solved sparsely (Cholesky)
   bool iterativeSolver = false;  ///< the reduced camera system was solved by conjugate gradients
+  bool implicitSchur = false;    ///< … with S applied implicitly (BALinearSolver::ImplicitSchur)
   Scalar lambda = Scalar(0);   ///< final LM damping
 };
 
@@ -332,6 +341,7 @@ void validate(const BAProblem<Scalar>& P, const BAOptions<Scalar>& opt) {
   if (!(opt.cgTolerance > Scalar(0)) || opt.cgMaxIterations < 1) {
     throw Error("bundleAdjust: cgTolerance must be > 0 and cgMaxIterations >= 1");
   }
+  if (opt.implicitMinPairsPerObservation < 0) throw Error("bundleAdjust: implicitMinPairsPerObservation must be >= 0");
 }
 
 }  // namespace ba_detail

@@ -8,6 +8,8 @@
 //   Iterative: conjugate gradients from x = 0, preconditioned by the inverses of S's 6×6
 //              diagonal blocks (block Jacobi; the "iterative Schur" of Agarwal et al. 2010), using
 //              only the stored blocks, to ‖S·x − b‖ ≤ tolerance·‖b‖ within maxIterations.
+//   Implicit:  the same iteration where S is known only by its product and its diagonal blocks
+//              (conjugateGradients; bundle_adjustment.hpp applies S point by point).
 // One solver per problem (it keeps the factorisation's pattern and its scratch); not thread-safe.
 #pragma once
 
@@ -29,7 +31,7 @@ inline std::uint64_t blockKey(int ci, int cj) {
 inline int blockKeyRow(std::uint64_t key) { return static_cast<int>(key >> 32); }
 inline int blockKeyCol(std::uint64_t key) { return static_cast<int>(key & 0xFFFFFFFFu); }
 
-enum class ReducedSolverMethod { Dense, Sparse, Iterative };
+enum class ReducedSolverMethod { Dense, Sparse, Iterative, ImplicitSchur };
 
 template <typename Scalar>
 class ReducedCameraSolver {
@@ -53,8 +55,51 @@ class ReducedCameraSolver {
       case ReducedSolverMethod::Dense: ok = solveDense(S, b, x); break;
       case ReducedSolverMethod::Sparse: ok = solveSparse(S, b, x); break;
       case ReducedSolverMethod::Iterative: ok = solveCG(S, b, x); break;
+      case ReducedSolverMethod::ImplicitSchur: throw Error("ReducedCameraSolver: an implicit S is solved by conjugateGradients");
     }
     return ok && x.allFinite();
+  }
+
+  /// Preconditioned conjugate gradients for S·x = b from x = 0, S given only by its product
+  /// (`apply(p, q)`: q = S·p) and its 6×6 diagonal blocks (`diagBlock(c)`, their inverses the
+  /// block-Jacobi preconditioner); to ‖S·x − b‖ ≤ cgTolerance·‖b‖ within cgMaxIterations. False
+  /// when a diagonal block is not positive definite or pᵀSp ≤ 0 (S not positive definite).
+  template <typename DiagBlock, typename Apply>
+  bool conjugateGradients(const DiagBlock& diagBlock, const VecX<Scalar>& b, VecX<Scalar>& x, const Apply& apply) {
+    blockInv_.resize(static_cast<std::size_t>(n_));
+    for (int c = 0; c < n_; ++c) {
+      const M6 D = diagBlock(c);
+      const Eigen::LLT<M6> l(D);
+      if (l.info() != Eigen::Success) return false;
+      blockInv_[static_cast<std::size_t>(c)] = l.solve(M6::Identity());
+    }
+    const auto precondition = [&](const VecX<Scalar>& r, VecX<Scalar>& z) {
+      z.resize(6 * n_);
+      for (int c = 0; c < n_; ++c) {
+        z.template segment<6>(6 * c).noalias() = blockInv_[static_cast<std::size_t>(c)] * r.template segment<6>(6 * c);
+      }
+    };
+    x.setZero(6 * n_);
+    r_ = b;
+    const Scalar bNorm = b.norm();
+    if (!(bNorm > Scalar(0))) return std::isfinite(double(bNorm));
+    precondition(r_, z_);
+    p_ = z_;
+    Scalar rz = r_.dot(z_);
+    for (int it = 0; it < cgMaxIterations_; ++it) {
+      apply(p_, q_);
+      const Scalar pq = p_.dot(q_);
+      if (!(pq > Scalar(0))) return false;
+      const Scalar alpha = rz / pq;
+      x.noalias() += alpha * p_;
+      r_.noalias() -= alpha * q_;
+      if (r_.norm() <= cgTolerance_ * bNorm) break;
+      precondition(r_, z_);
+      const Scalar rzNew = r_.dot(z_);
+      p_ = z_ + (rzNew / rz) * p_;
+      rz = rzNew;
+    }
+    return x.allFinite();
   }
 
   /// y = S·x from the stored blocks (S symmetric).
@@ -106,40 +151,9 @@ class ReducedCameraSolver {
   }
 
   bool solveCG(const std::vector<Block>& S, const VecX<Scalar>& b, VecX<Scalar>& x) {
-    blockInv_.resize(static_cast<std::size_t>(n_));
-    for (int c = 0; c < n_; ++c) {
-      const M6 D = S[static_cast<std::size_t>(diag_[static_cast<std::size_t>(c)])];
-      const Eigen::LLT<M6> l(D);
-      if (l.info() != Eigen::Success) return false;
-      blockInv_[static_cast<std::size_t>(c)] = l.solve(M6::Identity());
-    }
-    const auto precondition = [&](const VecX<Scalar>& r, VecX<Scalar>& z) {
-      z.resize(6 * n_);
-      for (int c = 0; c < n_; ++c) {
-        z.template segment<6>(6 * c).noalias() = blockInv_[static_cast<std::size_t>(c)] * r.template segment<6>(6 * c);
-      }
-    };
-    x.setZero(6 * n_);
-    r_ = b;
-    const Scalar bNorm = b.norm();
-    if (!(bNorm > Scalar(0))) return std::isfinite(double(bNorm));
-    precondition(r_, z_);
-    p_ = z_;
-    Scalar rz = r_.dot(z_);
-    for (int it = 0; it < cgMaxIterations_; ++it) {
-      multiply(S, p_, q_);
-      const Scalar pq = p_.dot(q_);
-      if (!(pq > Scalar(0))) return false;
-      const Scalar alpha = rz / pq;
-      x.noalias() += alpha * p_;
-      r_.noalias() -= alpha * q_;
-      if (r_.norm() <= cgTolerance_ * bNorm) break;
-      precondition(r_, z_);
-      const Scalar rzNew = r_.dot(z_);
-      p_ = z_ + (rzNew / rz) * p_;
-      rz = rzNew;
-    }
-    return true;
+    return conjugateGradients(
+        [&](int c) -> const Block& { return S[static_cast<std::size_t>(diag_[static_cast<std::size_t>(c)])]; }, b, x,
+        [&](const VecX<Scalar>& p, VecX<Scalar>& q) { multiply(S, p, q); });
   }
 
   ReducedSolverMethod method_;

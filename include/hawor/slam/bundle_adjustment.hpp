@@ -27,6 +27,12 @@
 //   preconditioned by the inverses of its 6×6 diagonal blocks (block Jacobi; the "iterative
 //   Schur" of Agarwal et al. 2010), using only the blocks S already holds, to a relative residual
 //   of cgTolerance within cgMaxIterations (an inexact step that LM accepts or damps like any).
+//   When points are seen by hundreds of cameras (a clip that keeps revisiting one place: one
+//   point, 300 keyframes, 45,000 blocks), S's blocks grow with the square of the observations
+//   (10 minutes of a kitchen: 3,400 keyframes, > 2 GB); from `implicitMinPairsPerObservation`
+//   camera pairs an observation, S is never formed: CG applies S·x = H_cc·x − Σ_p W_p H_pp⁻¹ W_pᵀx
+//   point by point, memory and work per product linear in the observations (the "implicit
+//   Schur" of Agarwal et al. 2010), preconditioned by S's diagonal blocks as before.
 // Gauge: a monocular problem has 7 gauge freedoms (pose and scale). Fix at least one pose
 //   (poseFixed); fix the scale with a second fixed pose or a BAScalePrior between two cameras.
 //   Without them the free directions are held only by the damping (no error, slow convergence).
@@ -124,7 +130,9 @@ class BundleAdjuster {
   std::vector<S3> gp_;
   std::vector<SM63> Wcp_;      // H_cp of used_ observation a (free pose & point)
   std::vector<SM6> priorOff_;  // prior contributions to off-diagonal blocks
-  std::vector<SM6> S_;
+  std::vector<SM6> S_;     // S's stored blocks (implicit: the damped H_cc and the priors' only)
+  std::vector<SM6> Sdiag_;  // implicit: S's diagonal blocks (the preconditioner)
+  bool implicit_ = false;
   std::vector<SM3> HppInv_;
   std::vector<SM63> Y_;
   VecX<Scalar> rhs_, dc_;
@@ -260,11 +268,21 @@ void BundleAdjuster<Scalar>::buildStructure() {
     for (auto it = b; it != e; ++it) cnt += obsPoseVar_[z(*it)] >= 0 ? 1 : 0;
     ptSchurCount_[z(j)] = cnt;
   }
-  // Blocks (ci ≤ cj) of S_: diagonal blocks, co-observing pairs, prior pairs.
-  for (int c = 0; c < nVC_; ++c) keys_.push_back(blockKey(c, c));
+  // S applied implicitly (ImplicitSchur) where forming it would visit many camera pairs per
+  // observation: Σ_p m_p(m_p − 1)/2 pairs for m_p free-pose observations of point p.
+  double pairs = 0.0;
   for (int j = 0; j < nVP_; ++j) {
+    const double m = ptSchurCount_[z(j)];
+    pairs += 0.5 * m * (m - 1.0);
+    maxList_ = std::max(maxList_, z(ptSchurCount_[z(j)]));
+  }
+  implicit_ = nVC_ > 0 && (opt_.solver == BALinearSolver::ImplicitSchur ||
+                           (opt_.solver == BALinearSolver::Auto && nVC_ >= opt_.iterativeMinPoses &&
+                            pairs > double(opt_.implicitMinPairsPerObservation) * double(std::max(nU_, 1))));
+  // Blocks (ci ≤ cj) of S_: diagonal blocks, co-observing pairs (not when implicit), prior pairs.
+  for (int c = 0; c < nVC_; ++c) keys_.push_back(blockKey(c, c));
+  for (int j = 0; j < nVP_ && !implicit_; ++j) {
     const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
-    maxList_ = std::max(maxList_, z(m));
     for (int u = 0; u < m; ++u) {
       for (int v = u + 1; v < m; ++v) {
         const int cu = obsPoseVar_[z(ptObs_[z(s0 + u)])], cv = obsPoseVar_[z(ptObs_[z(s0 + v)])];
@@ -279,7 +297,7 @@ void BundleAdjuster<Scalar>::buildStructure() {
   std::sort(keys_.begin(), keys_.end());
   keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
   // Block index of every off-diagonal pair (u < v, distinct poses) in the loop order of solveStep.
-  for (int j = 0; j < nVP_; ++j) {
+  for (int j = 0; j < nVP_ && !implicit_; ++j) {
     const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
     for (int u = 0; u < m; ++u) {
       for (int v = u + 1; v < m; ++v) {
@@ -290,14 +308,17 @@ void BundleAdjuster<Scalar>::buildStructure() {
   }
   diagBlock_.assign(z(nVC_), 0);
   for (int c = 0; c < nVC_; ++c) diagBlock_[z(c)] = blockOf(c, c);
-  const bool iterative = opt_.solver == BALinearSolver::Iterative ||
+  const bool iterative = implicit_ || opt_.solver == BALinearSolver::Iterative ||
                          (opt_.solver == BALinearSolver::Auto && nVC_ >= opt_.iterativeMinPoses &&
                           keys_.size() >= z(opt_.iterativeMinBlocksPerPose) * z(nVC_));
   const bool sparse = !iterative && (opt_.solver == BALinearSolver::Sparse ||
                                      (opt_.solver == BALinearSolver::Auto && nVC_ > opt_.denseMaxPoses));
-  method_ = iterative ? ReducedSolverMethod::Iterative : sparse ? ReducedSolverMethod::Sparse : ReducedSolverMethod::Dense;
+  method_ = implicit_ ? ReducedSolverMethod::ImplicitSchur
+            : iterative ? ReducedSolverMethod::Iterative
+            : sparse ? ReducedSolverMethod::Sparse : ReducedSolverMethod::Dense;
   rep_.sparseSolver = sparse && nVC_ > 0;
   rep_.iterativeSolver = iterative && nVC_ > 0;
+  rep_.implicitSchur = implicit_;
 
   Hcc_.resize(z(nVC_));
   gc_.resize(z(nVC_));
@@ -306,6 +327,7 @@ void BundleAdjuster<Scalar>::buildStructure() {
   Wcp_.resize(z(nU_));
   priorOff_.resize(keys_.size());
   S_.resize(keys_.size());
+  if (implicit_) Sdiag_.resize(z(nVC_));
   HppInv_.resize(z(nVP_));
   Y_.resize(maxList_);
   rhs_.resize(6 * nVC_);
@@ -411,7 +433,12 @@ bool BundleAdjuster<Scalar>::solveStep(ReducedCameraSolver<Scalar>& solver, Scal
     S_[z(diagBlock_[z(c)])] = H;
     rhs_.template segment<6>(6 * c) = -gc_[z(c)];
   }
-  // Schur complement of the point blocks.
+  if (implicit_) {
+    for (int c = 0; c < nVC_; ++c) Sdiag_[z(c)] = S_[z(diagBlock_[z(c)])];
+  }
+  // Schur complement of the point blocks (implicit: only its diagonal blocks, into Sdiag_).
+  std::vector<SM6>& diagOut = implicit_ ? Sdiag_ : S_;
+  const auto diagIndex = [&](int c) { return implicit_ ? z(c) : z(diagBlock_[z(c)]); };
   std::size_t pi = 0;
   for (int j = 0; j < nVP_; ++j) {
     const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
@@ -429,21 +456,42 @@ bool BundleAdjuster<Scalar>::solveStep(ReducedCameraSolver<Scalar>& solver, Scal
       const int au = ptObs_[z(s0 + u)];
       const int cu = obsPoseVar_[z(au)];
       const M63 Yu = Y_[z(u)];
-      S_[z(diagBlock_[z(cu)])].noalias() -= Yu * Wcp_[z(au)].transpose();
+      diagOut[diagIndex(cu)].noalias() -= Yu * Wcp_[z(au)].transpose();
       for (int v = u + 1; v < m; ++v) {
         const int av = ptObs_[z(s0 + v)];
         const int cv = obsPoseVar_[z(av)];
         if (cv == cu) {  // the same point observed twice by one pose
           const M6 Bm = Yu * Wcp_[z(av)].transpose();
-          S_[z(diagBlock_[z(cu)])].noalias() -= Bm + Bm.transpose();
-        } else {
+          diagOut[diagIndex(cu)].noalias() -= Bm + Bm.transpose();
+        } else if (!implicit_) {
           S_[z(pairBlock_[pi++])].noalias() -= Yu * Wcp_[z(av)].transpose();
         }
       }
     }
   }
-  // Solve S_·δc = rhs_.
-  if (nVC_ > 0 && !solver.solve(S_, rhs_, dc_)) return false;
+  // Solve S·δc = rhs_. Implicit: S·x = (damped H_cc + priors)·x − Σ_p W_p·H_pp⁻¹·(W_pᵀ·x), one
+  // point at a time (W_p: the point's H_cp blocks, one per free-pose observation).
+  if (nVC_ > 0 && implicit_) {
+    const auto apply = [&](const VecX<Scalar>& x, VecX<Scalar>& y) {
+      solver.multiply(S_, x, y);
+      for (int j = 0; j < nVP_; ++j) {
+        const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
+        V3 t = V3::Zero();
+        for (int u = 0; u < m; ++u) {
+          const int a = ptObs_[z(s0 + u)];
+          t.noalias() += Wcp_[z(a)].transpose() * x.template segment<6>(6 * obsPoseVar_[z(a)]);
+        }
+        const V3 h = HppInv_[z(j)] * t;
+        for (int u = 0; u < m; ++u) {
+          const int a = ptObs_[z(s0 + u)];
+          y.template segment<6>(6 * obsPoseVar_[z(a)]).noalias() -= Wcp_[z(a)] * h;
+        }
+      }
+    };
+    if (!solver.conjugateGradients([&](int c) -> const SM6& { return Sdiag_[z(c)]; }, rhs_, dc_, apply)) return false;
+  } else if (nVC_ > 0 && !solver.solve(S_, rhs_, dc_)) {
+    return false;
+  }
   // Back-substitution for the points.
   for (int j = 0; j < nVP_; ++j) {
     const int s0 = ptStart_[z(j)], m = ptSchurCount_[z(j)];
