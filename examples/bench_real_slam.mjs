@@ -23,7 +23,9 @@
 //               pose with one Sim(3) per segment over all passes (ATE in % of one pass's path), and
 //               'scale x' is the largest over the smallest of the passes' path lengths in a
 //               segment (1: every pass at one scale). No --readout (the rows' order flips at
-//               each turning point).
+//               each turning point). N up to 150 (10 minutes of video): the native runs' 'finish
+//               s' (the SLAM's finishing passes) and 'peak MB' (the process' peak resident
+//               memory) show what a long clip costs.
 //
 // --work DIR    bench_real's work folder (default $TMPDIR/hawor_bench_real): its variants/ and
 //               colmap/reference.json are used (run bench_real.mjs --make-only once, and COLMAP
@@ -287,7 +289,7 @@ function parse(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--record-only') o.recordOnly = true;
     else if (a === '--rerecord') o.rerecord = true;
-    else if (a === '--passes') { o.passes = Number(v()); if (!Number.isInteger(o.passes) || o.passes < 2 || o.passes > 100) throw new Error(`--passes must be an integer from 2 to 100, not '${argv[i]}'`); }
+    else if (a === '--passes') { o.passes = Number(v()); if (!Number.isInteger(o.passes) || o.passes < 2 || o.passes > 150) throw new Error(`--passes must be an integer from 2 to 150, not '${argv[i]}'`); }
     else if (a === '--playback') { o.playback = v(); if (!['forward', 'reverse', 'both'].includes(o.playback)) throw new Error(`--playback must be forward, reverse or both, not '${o.playback}'`); }
     else throw new Error(`unknown argument '${a}'`);
   }
@@ -345,15 +347,16 @@ async function main(argv) {
     const tracked = st.map((s, i) => (s === 0 || s === 3 ? i : -1)).filter((i) => i >= 0);
     const firstTracked = tracked.length ? (reversed ? tracked[tracked.length - 1] : tracked[0]) : -1;
     return { name, reversed, frames: T, camera, init: firstTracked >= 0 ? origFrame(v, passes ? passes.order[firstTracked] : firstTracked, n0) : null, lost: st.filter((s) => s === 2).length,
-      interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, links: run.summary?.place_links, placed: run.summary?.placed_segments, msMedian: run.summary?.median_ms_per_frame, status: st.join('') };
+      interpolated: st.filter((s) => s === 1).length, resets: run.summary?.resets, links: run.summary?.place_links, placed: run.summary?.placed_segments, msMedian: run.summary?.median_ms_per_frame,
+      finishS: run.summary?.finish_ms / 1000, peakMb: run.summary?.peak_rss_mb, status: st.join('') };
   });
   const names = segs.map((s) => s.name);
-  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), ...(o.passes ? names.map((s) => `scale x ${s}`) : []), 'init', 'lost', 'interp', 'resets', 'links', 'placed', 'ms/frame'];
+  const head = ['variant', 'frames', ...names.map((s) => `ATE % ${s}`), ...names.map((s) => `rot ° ${s}`), ...(o.passes ? names.map((s) => `scale x ${s}`) : []), 'init', 'lost', 'interp', 'resets', 'links', 'placed', 'ms/frame', 'finish s', 'peak MB'];
   const lines = [head];
   for (const r of rows) {
     if (r.error) { lines.push([r.name, `error: ${r.error}`]); continue; }
     lines.push([r.name, String(r.frames), ...names.map((s) => (r.camera[s]?.held ? `held ${f2(r.camera[s].atePct, 0)}` : f2(r.camera[s]?.atePct))),
-      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), ...(o.passes ? names.map((s) => f2(r.camera[s]?.scaleSpread)) : []), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), String(r.links ?? '-'), String(r.placed ?? '-'), f2(r.msMedian, 1)]);
+      ...names.map((s) => f2(r.camera[s]?.rot_mean_deg, 1)), ...(o.passes ? names.map((s) => f2(r.camera[s]?.scaleSpread)) : []), String(r.init ?? '-'), String(r.lost), String(r.interpolated), String(r.resets ?? '-'), String(r.links ?? '-'), String(r.placed ?? '-'), f2(r.msMedian, 1), f2(r.finishS, 1), f2(r.peakMb, 0)]);
   }
   const w = head.map((_, c) => Math.max(...lines.map((l) => (l[c] ?? '').length)));
   process.stdout.write(`${lines.map((l) => l.map((x, c) => (c === 0 ? (x ?? '').padEnd(w[c]) : (x ?? '').padStart(w[c]))).join('  ')).join('\n')}\n`);

@@ -2,6 +2,8 @@
 // (include/hawor/slam/mono_slam.hpp). Reads the images in name order, masks of the same names.
 // With a lens (--camera), frames and masks are rectified to the virtual pinhole camera with the
 // same intrinsics (render/rectify.hpp) before the SLAM sees them.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -221,7 +223,11 @@ int cmdSlam(int argc, char** argv) {
                    slam.numLiveTracks(), slam.numKeyframes(), ms.back());
     }
   }
+  const auto tFinish = std::chrono::steady_clock::now();
   const hawor::SlamResult<double> r = slam.finish();
+  const double finishMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tFinish).count();
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);  // ru_maxrss: the process' peak resident memory, KiB on Linux
   std::vector<hawor::TumPose<double>> traj;
   for (std::size_t i = 0; i < r.poses.size(); ++i) {
     hawor::TumPose<double> p;
@@ -260,6 +266,7 @@ int cmdSlam(int argc, char** argv) {
   JsonObject j;
   j.integer("frames", static_cast<long long>(r.poses.size()))
       .integer("keyframes", r.numKeyframes)
+      .integer("adjusted_keyframes", r.numAdjustedKeyframes)
       .integer("tracked", r.count(hawor::SlamStatus::Tracked))
       .integer("interpolated", r.count(hawor::SlamStatus::Interpolated))
       .integer("lost", r.count(hawor::SlamStatus::Lost))
@@ -279,7 +286,9 @@ int cmdSlam(int argc, char** argv) {
       .str("camera", lens.toString())
       .integer("rectified_outside", static_cast<long long>(rectify.numOutside()))
       .num("median_ms_per_frame", hawor::percentile(ms, 0.5))
-      .num("p95_ms_per_frame", hawor::percentile(ms, 0.95));
+      .num("p95_ms_per_frame", hawor::percentile(ms, 0.95))
+      .num("finish_ms", finishMs)
+      .num("peak_rss_mb", double(ru.ru_maxrss) / 1024.0);
   if (opt.finish.refineFocal) {
     j.num("focal_fx", r.camera.fx)
         .num("focal_guess_fx", r.focal.guessFx)

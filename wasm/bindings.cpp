@@ -21,7 +21,7 @@
 //       translations (3T), status: Uint8Array(T) (0 tracked, 1 interpolated, 2 lost,
 //       3 relocalised), keyframe: Uint8Array(T), inliers: Int32Array(T), keyframeDepths:
 //       {frames: Int32Array, kf: Int32Array, uv: Float64Array, depth: Float64Array}, points
-//       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numLosses,
+//       (3N: the final map points, world = first camera, SLAM units), numKeyframes, numAdjustedKeyframes, numLosses,
 //       numResets, numRelocalisations, numPlaceRelocalisations, numRevisitPoints, numPlaceLinks, placeLinks (Int32Array:
 //       frame, older frame, matched points per link), numPlacedSegments,
 //       numRefinedFrames, numHeadModelFrames, initialised, focal: {attempted, accepted, changed, guessFx,
@@ -397,6 +397,7 @@ class MonoSlam {
       for (const auto& X : r.points) pts.insert(pts.end(), {X(0), X(1), X(2)});
       o.set("points", f64(pts.data(), pts.size()));
       o.set("numKeyframes", r.numKeyframes);
+      o.set("numAdjustedKeyframes", r.numAdjustedKeyframes);
       o.set("numLosses", r.numLosses);
       o.set("numResets", r.numResets);
       o.set("numRelocalisations", r.numRelocalisations);

@@ -70,6 +70,33 @@ Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t s
   return run;
 }
 
+/// The preset's first `frames` frames played `passes` times, forward and backward in turn (the
+/// frame at a turning point not repeated): a wearer going back and forth over the same places.
+Run runPasses(const std::string& preset, int frames, int passes, std::uint64_t seed, hawor::SlamOptions<double> opt = {}) {
+  hs::SynthOptions so;
+  so.width = 640;
+  so.height = 480;
+  so.frames = frames;
+  so.textureDivisor = 2;
+  hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
+  opt.useMasks = true;
+  hawor::MonoSlam<double> slam(seq.camera(), opt);
+  Run run;
+  hs::SynthFrame<double> fr;
+  for (int p = 0; p < passes; ++p) {
+    for (int j = p == 0 ? 0 : 1; j < frames; ++j) {
+      const int i = p % 2 == 0 ? j : frames - 1 - j;
+      seq.renderFrame(i, fr);
+      run.gt.push_back(fr.worldFromCamera.t);
+      run.gtR.push_back(fr.worldFromCamera.R);
+      slam.process(fr.images.rgb, &fr.images.mask);
+    }
+  }
+  run.result = slam.finish();
+  for (std::size_t i = 1; i < run.gt.size(); ++i) run.path += (run.gt[i] - run.gt[i - 1]).norm();
+  return run;
+}
+
 /// Angle of a rotation matrix (degrees): acos((tr R − 1) / 2).
 double angleDeg(const hawor::Mat3<double>& R) {
   return std::acos(std::min(1.0, std::max(-1.0, (R.trace() - 1.0) / 2.0))) * 180.0 / M_PI;
@@ -433,4 +460,30 @@ TEST_CASE("MonoSlam: the revisit search and the sequence refinement tighten a ta
   CHECK(a < 0.6 * b);
   CHECK(a < 0.05 * on.path);
 
+}
+
+TEST_CASE("MonoSlam: back and forth over one place, the global bundle adjustment leaves out redundant keyframes above its budget", "[slam][system]") {
+  // Keyframe culling (finish.maxAdjustedKeyframes, finish.redundantShare): the passes after the
+  // first see the same points, so their keyframes are left out of the final adjustment once the
+  // keyframes exceed the budget (here 10); the trajectory stays as accurate as with every
+  // keyframe adjusted (the default budget, 500, keeps all of this clip's).
+  hawor::SlamOptions<double> budget;
+  budget.finish.maxAdjustedKeyframes = 10;
+  const Run culled = runPasses("walk", 30, 5, 3, budget);
+  const Run every = runPasses("walk", 30, 5, 3);
+  REQUIRE(culled.result.poses.size() == 146);
+  const double ateCulled = ateMetres(culled), ateEvery = ateMetres(every);
+  INFO("keyframes " << culled.result.numKeyframes << ", adjusted " << culled.result.numAdjustedKeyframes
+                    << "; ATE " << ateCulled << " m (every keyframe: " << ateEvery << " m) over " << culled.path << " m");
+  CHECK(every.result.numAdjustedKeyframes == every.result.numKeyframes);
+  CHECK(culled.result.numAdjustedKeyframes < culled.result.numKeyframes * 3 / 4);
+  CHECK(culled.result.numAdjustedKeyframes >= 10);
+  CHECK(ateCulled < 0.01 * culled.path);
+  CHECK(ateCulled < 1.5 * ateEvery + 1e-3 * culled.path);
+  hawor::SlamOptions<double> bad;
+  bad.finish.redundantShare = 0.0;
+  CHECK_THROWS_WITH(bad.validate(), Catch::Contains("finish.redundantShare"));
+  bad.finish.redundantShare = 0.9;
+  bad.finish.maxAdjustedKeyframes = 1;
+  CHECK_THROWS_WITH(bad.validate(), Catch::Contains("finish.maxAdjustedKeyframes"));
 }

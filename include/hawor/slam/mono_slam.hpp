@@ -182,6 +182,7 @@ struct SlamResult {
   std::vector<SlamKeyframeDepths<Scalar>> keyframeDepths;
   std::vector<Vec3<Scalar>> points;   ///< final map points (world)
   int numKeyframes = 0;
+  int numAdjustedKeyframes = 0;       ///< keyframes in the final global bundle adjustment (the others redundant)
   int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
   int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
   int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
@@ -411,14 +412,16 @@ class MonoSlam {
   void updateMedianDepth();
   std::vector<int> lastWindow() const;
   static BAOptions<Scalar> mapBAOptions(int iterations);
-  void adjust(const std::vector<int>& window, int iterations, bool global, bool withFocal = false);
-  void cullObservations(const std::vector<int>& pts);
+  BAReport<Scalar> adjust(const std::vector<int>& window, int iterations, bool global, bool withFocal = false,
+                          const std::vector<char>* leftOut = nullptr);
+  void cullObservations(const std::vector<int>& pts, const std::vector<char>* leftOut = nullptr);
   void foundCorrespondences(std::size_t before, std::vector<V3>& X, std::vector<V2>& uv) const;
   void removeTracksFrom(std::size_t before);
   void removeTracks(const std::vector<char>& drop);
 
   // finish() (mono_slam/finish.hpp)
-  void carryFramesWithKeyframes(const std::vector<SE3T>& before);
+  std::vector<char> redundantKeyframes() const;
+  void carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<char>& leftOut);
   void refineAllFrames();
   bool refineWholeSequence();
   bool refineFocalOnSequence();
@@ -488,6 +491,7 @@ class MonoSlam {
   int placeRelocalisations_ = 0;
   bool afterLoss_ = false, everInitialised_ = false;
   int lastKfInliers_ = 0, framesSinceKf_ = 0;
+  int adjustedKeyframes_ = 0;  ///< keyframes in finish()'s global bundle adjustment
   Scalar lastMedianDepth_ = Scalar(0);
   bool focalAttempted_ = false;
   FocalRefineResult<Scalar> focal_;

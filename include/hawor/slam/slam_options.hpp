@@ -232,6 +232,17 @@ struct SlamJoinOptions {
 template <typename Scalar>
 struct SlamFinishOptions {
   bool globalBundleAdjustment = true;  ///< every keyframe and point, per segment
+  /// Above maxAdjustedKeyframes keyframes, the global bundle adjustment leaves out redundant
+  /// ones, newest first, until that many are left: a keyframe at least redundantShare of whose
+  /// map points are seen by 3 other keyframes it keeps (keyframe culling, Mur-Artal et al. 2015
+  /// §VI-E). A clip that revisits one place for minutes adds keyframes that see only old points
+  /// (10 minutes of a kitchen: 3,388 keyframes, the adjustment 94 s; 48 s with 2,309 of them).
+  /// Below the budget every keyframe is adjusted: the
+  /// redundant ones still add constraints (left out on the clean synthetic seeds, the geometric
+  /// mean ATE rose 0.261 -> 0.287 %). The left-out keyframes move with the kept ones like any
+  /// frame. redundantShare > 1: every keyframe.
+  int maxAdjustedKeyframes = 500;
+  Scalar redundantShare = Scalar(0.9);
   bool refineFrames = true;            ///< every frame re-estimated against the final map
   /// Full-sequence bundle adjustment of every frame over every track (sequence_refine.hpp),
   /// tracks joined across resets, relocalisations and place links.
@@ -259,6 +270,9 @@ struct SlamFinishOptions {
   void validate() const {
     if (focalMaxFrames < 3 || focalFrameSpacing < 1) throw Error("finish.focalMaxFrames must be >= 3, finish.focalFrameSpacing >= 1");
     if (!(focalMinStd >= Scalar(0))) throw Error("finish.focalMinStd must be >= 0");
+    if (!(redundantShare > Scalar(0)) || maxAdjustedKeyframes < 2) {
+      throw Error("finish.redundantShare must be > 0 and finish.maxAdjustedKeyframes >= 2");
+    }
   }
 };
 

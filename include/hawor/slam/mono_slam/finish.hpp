@@ -9,20 +9,62 @@
 
 namespace hawor {
 
-/// After the global bundle adjustment (keyframe poses `before` it): every keyframe's frame takes
-/// its adjusted pose, and every other posed frame moves with the keyframe before it,
-/// T ← T'_k·T_k⁻¹·T (its pose relative to that keyframe kept, as tracking made it). The
-/// adjustment may reshape a segment by more than refineAllFrames' gate (a segment rebuilt from a
-/// short pair, tied to the rest of the map by revisits: metres in the kitchen passes); a frame
-/// left at its old pose would keep the old shape, off its own keyframes. A frame whose keyframe
-/// before it is in another segment (the frame before a relocalisation by place, posed in the
-/// segment it re-entered) moves with the next keyframe of its own segment.
+/// The keyframes the global bundle adjustment leaves out (finish.maxAdjustedKeyframes,
+/// finish.redundantShare): while more than the budget are kept, newest first, a keyframe at least
+/// that share of whose valid map points is seen by 3 other keyframes still kept; a segment's
+/// first keyframe (its gauge) is always kept.
 template <typename Scalar>
-void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before) {
-  if (keyframes_.empty()) return;
-  std::size_t k = 0;
+std::vector<char> MonoSlam<Scalar>::redundantKeyframes() const {
+  const std::size_t nk = keyframes_.size();
+  std::vector<char> out(nk, 0);
+  if (!(opt_.finish.redundantShare <= Scalar(1)) || nk <= static_cast<std::size_t>(opt_.finish.maxAdjustedKeyframes)) return out;
+  // Per keyframe its distinct valid points; per point the keyframes kept that see it.
+  std::vector<std::vector<int>> seen(nk);
+  std::vector<int> count(points_.size(), 0), stamp(nk, -1);
+  for (std::size_t pid = 0; pid < points_.size(); ++pid) {
+    if (!points_[pid].valid) continue;
+    for (const Obs& o : points_[pid].obs) {
+      int& st = stamp[static_cast<std::size_t>(o.kf)];
+      if (st == static_cast<int>(pid)) continue;
+      st = static_cast<int>(pid);
+      seen[static_cast<std::size_t>(o.kf)].push_back(static_cast<int>(pid));
+      ++count[pid];
+    }
+  }
+  const std::vector<int> firsts = segmentFirstKeyframes();
+  std::size_t kept = nk;
+  for (std::size_t k = nk; k-- > 0 && kept > static_cast<std::size_t>(opt_.finish.maxAdjustedKeyframes);) {
+    if (seen[k].empty() || std::find(firsts.begin(), firsts.end(), static_cast<int>(k)) != firsts.end()) continue;
+    std::size_t covered = 0;
+    for (int pid : seen[k]) covered += count[static_cast<std::size_t>(pid)] >= 4 ? 1 : 0;
+    if (Scalar(covered) < opt_.finish.redundantShare * Scalar(seen[k].size())) continue;
+    out[k] = 1;
+    --kept;
+    for (int pid : seen[k]) --count[static_cast<std::size_t>(pid)];
+  }
+  return out;
+}
+
+/// After the global bundle adjustment (keyframe poses `before` it): every adjusted keyframe's
+/// frame takes its adjusted pose, and every other posed frame (a left-out keyframe's included)
+/// moves with the adjusted keyframe before it, T ← T'_k·T_k⁻¹·T (its pose relative to that
+/// keyframe kept, as tracking made it). The adjustment may reshape a segment by more than
+/// refineAllFrames' gate (a segment rebuilt from a short pair, tied to the rest of the map by
+/// revisits: metres in the kitchen passes); a frame left at its old pose would keep the old
+/// shape, off its own keyframes. A frame whose keyframe before it is in another segment (the
+/// frame before a relocalisation by place, posed in the segment it re-entered) moves with the
+/// next keyframe of its own segment. A left-out keyframe takes its frame's new pose.
+template <typename Scalar>
+void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<char>& leftOut) {
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    if (!leftOut[k]) kept.push_back(k);
+  }
+  if (kept.empty()) return;
+  std::size_t i = 0;  // index into kept
   for (std::size_t f = 0; f < frames_.size(); ++f) {
-    while (k + 1 < keyframes_.size() && keyframes_[k + 1].frame <= static_cast<int>(f)) ++k;
+    while (i + 1 < kept.size() && keyframes_[kept[i + 1]].frame <= static_cast<int>(f)) ++i;
+    const std::size_t k = kept[i];
     if (keyframes_[k].frame > static_cast<int>(f)) continue;  // before the first keyframe
     Frame& fr = frames_[f];
     if (keyframes_[k].frame == static_cast<int>(f)) {
@@ -30,10 +72,13 @@ void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before)
       continue;
     }
     if (!fr.posed) continue;
-    std::size_t c = k;
-    while (c < keyframes_.size() && keyframes_[c].segment != fr.segment) ++c;
-    if (c == keyframes_.size()) continue;
-    fr.T = keyframes_[c].T * before[c].inverse() * fr.T;
+    std::size_t c = i;
+    while (c < kept.size() && keyframes_[kept[c]].segment != fr.segment) ++c;
+    if (c == kept.size()) continue;
+    fr.T = keyframes_[kept[c]].T * before[kept[c]].inverse() * fr.T;
+  }
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    if (leftOut[k]) keyframes_[k].T = frames_[static_cast<std::size_t>(keyframes_[k].frame)].T;
   }
 }
 
@@ -308,14 +353,25 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   if (opt_.link.enabled && resets_ > 0) applySegmentLinks();
   if (opt_.join.headModel && resets_ > 0) joinSegmentPairsByHead();
   if (opt_.finish.globalBundleAdjustment && keyframes_.size() >= 2) {
-    std::vector<int> all(keyframes_.size());
-    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    const std::vector<char> leftOut = redundantKeyframes();
+    std::vector<int> kept;
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (!leftOut[k]) kept.push_back(static_cast<int>(k));
+    }
     // With the sequence refinement on, the focal is refined on its problem instead (every
     // frame's tracks, far more of the motion that determines the focal than the keyframes').
     std::vector<SE3T> before(keyframes_.size());
     for (std::size_t k = 0; k < keyframes_.size(); ++k) before[k] = keyframes_[k].T;
-    adjust(all, opt_.globalIterations, true, opt_.finish.refineFocal && !opt_.finish.sequenceRefine);
-    carryFramesWithKeyframes(before);
+    const BAReport<Scalar> rep = adjust(kept, opt_.globalIterations, true, opt_.finish.refineFocal && !opt_.finish.sequenceRefine, &leftOut);
+    carryFramesWithKeyframes(before, leftOut);
+    adjustedKeyframes_ = static_cast<int>(kept.size());
+    if (opt_.log) {
+      opt_.log("finish: global bundle adjustment of " + std::to_string(kept.size()) + " of " +
+               std::to_string(keyframes_.size()) + " keyframes (the others redundant), " +
+               std::to_string(rep.usedObservations) + " observations, " + std::to_string(rep.iterations) +
+               " iterations, " + (rep.implicitSchur ? "implicit Schur" : rep.iterativeSolver ? "conjugate gradients" :
+                                  rep.sparseSolver ? "sparse Cholesky" : "dense Cholesky"));
+    }
   }
   if (opt_.finish.refineFrames && !points_.empty()) refineAllFrames();
   fillUnposed();
@@ -420,6 +476,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
     res.keyframeDepths.push_back(std::move(d));
   }
   res.numKeyframes = static_cast<int>(keyframes_.size());
+  res.numAdjustedKeyframes = adjustedKeyframes_;
   res.numLosses = losses_;
   res.numResets = resets_;
   res.numRelocalisations = relocalisations_;

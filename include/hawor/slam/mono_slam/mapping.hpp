@@ -181,8 +181,11 @@ BAOptions<Scalar> MonoSlam<Scalar>::mapBAOptions(int iterations) {
 /// window that see those points are fixed. Gauge: the first keyframe of each segment is fixed
 /// and its first baseline held by a scale prior when no other fixed keyframe anchors the scale.
 template <typename Scalar>
-void MonoSlam<Scalar>::adjust(const std::vector<int>& window, int iterations, bool global, bool withFocal) {
-  if (window.empty()) return;
+BAReport<Scalar> MonoSlam<Scalar>::adjust(const std::vector<int>& window, int iterations, bool global, bool withFocal,
+                                          const std::vector<char>* leftOut) {
+  const auto out = [&](int k) { return leftOut && (*leftOut)[static_cast<std::size_t>(k)]; };
+  BAReport<Scalar> rep;
+  if (window.empty()) return rep;
   std::vector<int> kfVar(keyframes_.size(), -1), ptVar(points_.size(), -1);
   BAProblem<Scalar> P;
   P.camera = cam_;
@@ -203,10 +206,10 @@ void MonoSlam<Scalar>::adjust(const std::vector<int>& window, int iterations, bo
       ptOf.push_back(pid);
     }
   }
-  if (P.points.empty()) return;
+  if (P.points.empty()) return rep;
   for (int pid : ptOf) {
     for (const Obs& o : points_[static_cast<std::size_t>(pid)].obs) {
-      if (kfVar[static_cast<std::size_t>(o.kf)] < 0) addKf(o.kf, true);
+      if (kfVar[static_cast<std::size_t>(o.kf)] < 0 && !out(o.kf)) addKf(o.kf, true);
     }
   }
   // Gauge, per segment (docs/design.md §5: monocular, 7 freedoms). Local: the keyframes outside the
@@ -250,6 +253,7 @@ void MonoSlam<Scalar>::adjust(const std::vector<int>& window, int iterations, bo
   for (std::size_t j = 0; j < ptOf.size(); ++j) {
     const MapPoint& p = points_[static_cast<std::size_t>(ptOf[j])];
     for (const Obs& o : p.obs) {
+      if (out(o.kf)) continue;
       BAObservation<Scalar> ob;
       ob.pose = kfVar[static_cast<std::size_t>(o.kf)];
       ob.point = static_cast<int>(j);
@@ -280,24 +284,30 @@ void MonoSlam<Scalar>::adjust(const std::vector<int>& window, int iterations, bo
                " BAs): " + focal_.reason);
     }
   } else {
-    bundleAdjust(P, bo);
+    rep = bundleAdjust(P, bo);
   }
   for (std::size_t v = 0; v < kfOf.size(); ++v) {
     if (!P.poseFixed[v]) keyframes_[static_cast<std::size_t>(kfOf[v])].T = P.poses[v];
   }
   for (std::size_t j = 0; j < ptOf.size(); ++j) points_[static_cast<std::size_t>(ptOf[j])].X = P.points[j];
-  cullObservations(ptOf);
+  cullObservations(ptOf, leftOut);
+  return rep;
 }
 
 /// Drops observations whose reprojection error exceeds maxReprojPx (or that are behind the
 /// camera); a point left with fewer than two observations is invalid, and its track unmapped.
+/// Observations by `leftOut` keyframes (not adjusted: their poses are stale) are kept.
 template <typename Scalar>
-void MonoSlam<Scalar>::cullObservations(const std::vector<int>& pts) {
+void MonoSlam<Scalar>::cullObservations(const std::vector<int>& pts, const std::vector<char>* leftOut) {
   const Scalar maxErr2 = Scalar(4) * opt_.maxReprojPx * opt_.maxReprojPx;
   for (int pid : pts) {
     MapPoint& p = points_[static_cast<std::size_t>(pid)];
     std::size_t w = 0;
     for (std::size_t i = 0; i < p.obs.size(); ++i) {
+      if (leftOut && (*leftOut)[static_cast<std::size_t>(p.obs[i].kf)]) {
+        p.obs[w++] = p.obs[i];
+        continue;
+      }
       const Keyframe& kf = keyframes_[static_cast<std::size_t>(p.obs[i].kf)];
       const V3 Xc = kf.T.inverse() * p.X;
       if (Xc(2) > Scalar(0) && (cam_.project(Xc) - p.obs[i].uv).squaredNorm() <= maxErr2) p.obs[w++] = p.obs[i];
