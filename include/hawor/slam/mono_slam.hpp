@@ -421,7 +421,7 @@ class MonoSlam {
 
   // finish() (mono_slam/finish.hpp)
   std::vector<char> redundantKeyframes() const;
-  void carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<char>& leftOut);
+  void carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<int>& kept);
   void refineAllFrames();
   bool refineWholeSequence();
   bool refineFocalOnSequence();

@@ -237,10 +237,10 @@ struct SlamFinishOptions {
   /// map points are seen by 3 other keyframes it keeps (keyframe culling, Mur-Artal et al. 2015
   /// §VI-E). A clip that revisits one place for minutes adds keyframes that see only old points
   /// (10 minutes of a kitchen: 3,388 keyframes, the adjustment 94 s; 48 s with 2,309 of them).
-  /// Below the budget every keyframe is adjusted: the
-  /// redundant ones still add constraints (left out on the clean synthetic seeds, the geometric
-  /// mean ATE rose 0.261 -> 0.287 %). The left-out keyframes move with the kept ones like any
-  /// frame. redundantShare > 1: every keyframe.
+  /// Below the budget every keyframe is adjusted: the redundant ones still add constraints (left
+  /// out on the clean synthetic seeds, the geometric mean ATE rose 0.261 -> 0.287 %). The
+  /// left-out keyframes move with the kept ones like any frame. redundantShare > 1: every
+  /// keyframe.
   int maxAdjustedKeyframes = 500;
   Scalar redundantShare = Scalar(0.9);
   bool refineFrames = true;            ///< every frame re-estimated against the final map

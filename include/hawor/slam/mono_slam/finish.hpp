@@ -53,18 +53,14 @@ std::vector<char> MonoSlam<Scalar>::redundantKeyframes() const {
 /// revisits: metres in the kitchen passes); a frame left at its old pose would keep the old
 /// shape, off its own keyframes. A frame whose keyframe before it is in another segment (the
 /// frame before a relocalisation by place, posed in the segment it re-entered) moves with the
-/// next keyframe of its own segment. A left-out keyframe takes its frame's new pose.
+/// next keyframe of its own segment. `kept`: the adjusted keyframes, in order.
 template <typename Scalar>
-void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<char>& leftOut) {
-  std::vector<std::size_t> kept;
-  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    if (!leftOut[k]) kept.push_back(k);
-  }
+void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before, const std::vector<int>& kept) {
   if (kept.empty()) return;
   std::size_t i = 0;  // index into kept
   for (std::size_t f = 0; f < frames_.size(); ++f) {
-    while (i + 1 < kept.size() && keyframes_[kept[i + 1]].frame <= static_cast<int>(f)) ++i;
-    const std::size_t k = kept[i];
+    while (i + 1 < kept.size() && keyframes_[static_cast<std::size_t>(kept[i + 1])].frame <= static_cast<int>(f)) ++i;
+    const std::size_t k = static_cast<std::size_t>(kept[i]);
     if (keyframes_[k].frame > static_cast<int>(f)) continue;  // before the first keyframe
     Frame& fr = frames_[f];
     if (keyframes_[k].frame == static_cast<int>(f)) {
@@ -73,12 +69,10 @@ void MonoSlam<Scalar>::carryFramesWithKeyframes(const std::vector<SE3T>& before,
     }
     if (!fr.posed) continue;
     std::size_t c = i;
-    while (c < kept.size() && keyframes_[kept[c]].segment != fr.segment) ++c;
+    while (c < kept.size() && keyframes_[static_cast<std::size_t>(kept[c])].segment != fr.segment) ++c;
     if (c == kept.size()) continue;
-    fr.T = keyframes_[kept[c]].T * before[kept[c]].inverse() * fr.T;
-  }
-  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    if (leftOut[k]) keyframes_[k].T = frames_[static_cast<std::size_t>(keyframes_[k].frame)].T;
+    const std::size_t kc = static_cast<std::size_t>(kept[c]);
+    fr.T = keyframes_[kc].T * before[kc].inverse() * fr.T;
   }
 }
 
@@ -363,7 +357,11 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
     std::vector<SE3T> before(keyframes_.size());
     for (std::size_t k = 0; k < keyframes_.size(); ++k) before[k] = keyframes_[k].T;
     const BAReport<Scalar> rep = adjust(kept, opt_.globalIterations, true, opt_.finish.refineFocal && !opt_.finish.sequenceRefine, &leftOut);
-    carryFramesWithKeyframes(before, leftOut);
+    carryFramesWithKeyframes(before, kept);
+    // a left-out keyframe takes its frame's carried pose
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (leftOut[k]) keyframes_[k].T = frames_[static_cast<std::size_t>(keyframes_[k].frame)].T;
+    }
     adjustedKeyframes_ = static_cast<int>(kept.size());
     if (opt_.log) {
       opt_.log("finish: global bundle adjustment of " + std::to_string(kept.size()) + " of " +
