@@ -27,7 +27,7 @@ foreach(module slam hand geometry motion eval io render synth scale)
   # longest compile of the suite): MonoSlam under WebAssembly is checked by the wasm_bindings test
   # (wasm/CMakeLists.txt) on a synthetic sequence against the ground truth and the native CLI.
   if(EMSCRIPTEN AND module STREQUAL "slam")
-    list(FILTER _unit EXCLUDE REGEX "test_mono_slam\\.cpp$")
+    list(FILTER _unit EXCLUDE REGEX "test_(mono_slam|pipeline)\\.cpp$")
   endif()
   # Nor does it build the synthetic generator's tests (the generator is not part of the
   # WebAssembly core: wasm/bindings.cpp does not include synth/), nor those of hand/ and motion/,

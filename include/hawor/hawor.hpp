@@ -21,6 +21,7 @@
 #include "slam/slam.hpp"
 #include "scale/scale.hpp"
 #include "motion/motion.hpp"
+#include "pipeline/pipeline.hpp"
 #include "eval/eval.hpp"
 #include "io/io.hpp"
 #include "synth/synth.hpp"

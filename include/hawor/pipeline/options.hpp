@@ -1,0 +1,72 @@
+// hawor/pipeline/options.hpp — the options of the whole pipeline (pipeline.hpp), with the defaults
+// the browser app, `node web/cli.mjs run` and `hawor world` use.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <string>
+
+#include "hawor/common.hpp"
+#include "hawor/geometry/camera.hpp"
+#include "hawor/motion/infill.hpp"
+
+namespace hawor {
+
+template <typename Scalar>
+struct PipelineOptions {
+  // --- the video ---
+  PinholeCamera<Scalar> camera;          ///< intrinsics at the video's size (width, height set)
+  std::string lens = "pinhole";          ///< 'pinhole', 'opencv:k1,k2,p1,p2[,k3]' or 'fisheye:k1..k4' (geometry/lens.hpp)
+  Scalar fps = Scalar(30);
+  /// Rolling shutter: seconds from the first row's exposure to the last's (0: global shutter; at
+  /// most one frame interval; negative: rows read bottom to top).
+  Scalar readout = Scalar(0);
+  // --- SLAM ---
+  int slamMaxSide = 640;                 ///< the SLAM and the hand masks run at this long side
+  int maskDilatePx = 2;                  ///< hand masks grown by this many pixels (SLAM resolution)
+  bool refineFocal = true;               ///< the SLAM's final bundle adjustment refines the focal
+  /// Std of log(f / guess) of the focal prior; NaN: 0.1 for a focal the user gave, else 0.3 (a
+  /// field-of-view guess).
+  Scalar focalPriorSigma = std::numeric_limits<Scalar>::quiet_NaN();
+  bool userFocal = false;                ///< the focal came from the user (not a field-of-view guess)
+  int focalMaxPasses = 4;                ///< SLAM passes at most while the refined focal moves
+  /// The SLAM's frames and masks are kept up to this many bytes for those further passes (0:
+  /// none; the focal is then refined in the final bundle adjustment only).
+  std::size_t focalRerunBytes = std::size_t(256) << 20;
+  std::string slamSet;                   ///< "NAME=VALUE,..." over SlamOptions (ablations; slam_option_table.hpp)
+  // --- hands ---
+  /// A fit is believed when its wrist lies this far in front of the camera (metres): behind the
+  /// camera or absurdly far is not a hand.
+  Scalar minHandDepth = Scalar(0.03), maxHandDepth = Scalar(5);
+  InfillMethod infill = InfillMethod::Spline;
+  int handScaleSmooth = 0;               ///< experiment: moving-average half-width of the wrists before the hand cue
+  // --- metric scale ---
+  bool groundScale = true;               ///< the ground cue: the cameras' height above the map's floor
+  Scalar eyeHeight = Scalar(1.6);        ///< that height in metres (a standing adult's head camera)
+  /// Keep every frame's hand mask for the depth cue (finish() is then given keyframe depth maps).
+  bool depthMasks = false;
+
+  /// Throws hawor::Error naming the first invalid option.
+  void validate() const {
+    camera.validate();
+    if (!(fps > Scalar(0)) || !std::isfinite(double(fps))) throw Error("pipeline: fps must be finite and > 0, not " + std::to_string(double(fps)));
+    if (!(std::abs(readout) <= Scalar(1) / fps)) {
+      throw Error("pipeline: the rolling-shutter readout " + std::to_string(double(readout)) + " s must lie within one frame interval (±" +
+                  std::to_string(double(Scalar(1) / fps)) + " s)");
+    }
+    if (slamMaxSide < 16) throw Error("pipeline: slamMaxSide must be >= 16");
+    if (maskDilatePx < 0 || maskDilatePx > 64) throw Error("pipeline: maskDilatePx must be in [0, 64]");
+    if (!std::isnan(double(focalPriorSigma)) && !(focalPriorSigma > Scalar(0))) throw Error("pipeline: focalPriorSigma must be > 0");
+    if (focalMaxPasses < 1) throw Error("pipeline: focalMaxPasses must be >= 1");
+    if (!(minHandDepth >= Scalar(0) && maxHandDepth > minHandDepth)) throw Error("pipeline: need 0 <= minHandDepth < maxHandDepth");
+    if (handScaleSmooth < 0) throw Error("pipeline: handScaleSmooth must be >= 0");
+    if (!(eyeHeight >= Scalar(0.8) && eyeHeight <= Scalar(3))) {
+      throw Error("pipeline: the camera height above the floor must be between 0.8 and 3 m, not " + std::to_string(double(eyeHeight)));
+    }
+  }
+
+  Scalar priorSigma() const { return std::isnan(double(focalPriorSigma)) ? (userFocal ? Scalar(0.1) : Scalar(0.3)) : focalPriorSigma; }
+};
+
+}  // namespace hawor

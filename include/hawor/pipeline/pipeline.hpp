@@ -1,0 +1,652 @@
+// hawor/pipeline/pipeline.hpp — the whole method on a stream of frames, in one place that every
+// driver calls (the browser app and `node web/cli.mjs run` through the WebAssembly core, `hawor
+// world` natively): the perception (or another regressor) gives hands per frame, this object
+// holds the policy that turns them and the frames into world-space hands and a metric camera.
+//
+// Per frame (push):
+//   1. Sides (sides.hpp): which detection is the left hand and which the right.
+//   2. The fit (hand/fit.hpp) of each side's model to its 2D keypoints (and metric 3D keypoints
+//      when the network gives them), warm-started from the previous frame; through a lens the
+//      keypoints are undistorted to the virtual pinhole camera first. A fit is believed when its
+//      wrist lies minHandDepth..maxHandDepth in front of the camera and its error is finite.
+//      pushHands instead takes camera-frame hands from any regressor (HaMeR, WiLoR, HaWoR's own
+//      network): no fit.
+//   3. The believed hands' silhouettes at the SLAM's resolution (render/hand_masks.hpp), grown by
+//      maskDilatePx: the SLAM's dual masking (docs/design.md §5).
+//   4. The frame downscaled to grey at slamMaxSide (through a lens: rectified to the virtual
+//      pinhole camera, whose unseen part joins the mask), and the SLAM (slam/mono_slam.hpp).
+// finishCamera(): the SLAM's finishing passes; while its bundle adjustment moves the focal (and
+// the frames were kept: focalRerunBytes), the SLAM runs again from the start with the refined
+// focal (a map built with a wrong focal biases each pass's estimate toward its start), at most
+// focalMaxPasses times; with a refined focal the hands are fitted again.
+// finish(depth maps of the keyframes, optional): the metric scale from every cue available
+// (scale/metric_scale.hpp: a depth network on the keyframes, the hands, the floor under the
+// cameras), the camera and the map in metres, each hand's camera-frame motion taken to the world
+// (motion/canonical.hpp), the unseen frames filled (motion/infill.hpp), and the keypoints of the
+// world motion. The world is the first camera's frame.
+// Not thread-safe; one object per video. The hand models must outlive it.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hawor/common.hpp"
+#include "hawor/geometry/camera_model.hpp"
+#include "hawor/geometry/rotation.hpp"
+#include "hawor/hand/fit.hpp"
+#include "hawor/hand/forward.hpp"
+#include "hawor/motion/canonical.hpp"
+#include "hawor/motion/infill.hpp"
+#include "hawor/motion/rest_root.hpp"
+#include "hawor/pipeline/options.hpp"
+#include "hawor/pipeline/result.hpp"
+#include "hawor/pipeline/sides.hpp"
+#include "hawor/render/hand_masks.hpp"
+#include "hawor/render/rectify.hpp"
+#include "hawor/render/resample.hpp"
+#include "hawor/scale/metric_scale.hpp"
+#include "hawor/slam/mono_slam.hpp"
+#include "hawor/slam/slam_option_table.hpp"
+
+namespace hawor {
+
+/// The SLAM's frame size for a video: the long side at most maxSide, the aspect kept.
+inline std::array<int, 2> pipelineSlamSize(int width, int height, int maxSide) {
+  const double s = std::min(1.0, double(maxSide) / double(std::max(width, height)));
+  return {std::max(16, static_cast<int>(std::lround(width * s))), std::max(16, static_cast<int>(std::lround(height * s)))};
+}
+
+template <typename Scalar>
+class Pipeline {
+ public:
+  /// What push() reports about a frame: the SLAM's status and, per side, the detection it was
+  /// given (-1: none) and whether its hand was believed.
+  struct FrameInfo {
+    SlamStatus slamStatus = SlamStatus::Lost;
+    std::array<int, 2> detection{-1, -1};
+    std::array<bool, 2> valid{false, false};
+  };
+
+  Pipeline(const PipelineOptions<Scalar>& options, const HandModel<Scalar>& left, const HandModel<Scalar>& right)
+      : opt_(options), models_{&left, &right}, fitters_{HandFitter<Scalar>(left), HandFitter<Scalar>(right)} {
+    opt_.validate();
+    for (int s = 0; s < 2; ++s) {
+      if (models_[s]->numKeypoints() != kKeypoints) {
+        throw Error(std::string("pipeline: the ") + sideName(s) + " hand model gives " + std::to_string(models_[s]->numKeypoints()) +
+                    " keypoints, not 21");
+      }
+    }
+    const PinholeCamera<Scalar>& c = opt_.camera;
+    lens_ = CameraModel<Scalar>{c, Lens<Scalar>::parse(opt_.lens)};
+    lens_.validate();
+    withLens_ = !lens_.lens.isPinhole();
+    const std::array<int, 2> ss = pipelineSlamSize(c.width, c.height, opt_.slamMaxSide);
+    const Scalar sx = Scalar(ss[0]) / Scalar(c.width), sy = Scalar(ss[1]) / Scalar(c.height);
+    // The SLAM image's pixel u' covers source pixels u = (u' + 0.5) / s − 0.5.
+    slamCam_.fx = c.fx * sx, slamCam_.fy = c.fy * sy;
+    slamCam_.cx = (c.cx + Scalar(0.5)) * sx - Scalar(0.5), slamCam_.cy = (c.cy + Scalar(0.5)) * sy - Scalar(0.5);
+    slamCam_.width = ss[0], slamCam_.height = ss[1];
+    if (withLens_) rectify_ = std::make_unique<RectifyMap<Scalar>>(CameraModel<Scalar>{slamCam_, lens_.lens});
+    slam_ = std::make_unique<MonoSlam<Scalar>>(slamCam_, slamOptions(Scalar(-1)));
+    keepSlam_ = opt_.refineFocal && opt_.focalRerunBytes > 0;
+  }
+
+  const PipelineOptions<Scalar>& options() const { return opt_; }
+  const PinholeCamera<Scalar>& slamCamera() const { return slamCam_; }
+  int frames() const { return static_cast<int>(frames_.size()); }
+
+  /// A frame with the perception's detections. `image`: the video frame (the options' size; grey,
+  /// RGB or RGBA) or its grey plane at the SLAM's size.
+  FrameInfo push(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
+    checkFrame(image);
+    for (std::size_t i = 0; i < detections.size(); ++i) checkDetection(detections[i], i);
+    frames_.emplace_back();
+    const auto t0 = Clock::now();
+    const std::array<int, 2> sides = assignSides(detections, sideState_, reach());
+    updateSideState(sideState_, detections, sides);
+    FrameInfo info;
+    info.detection = sides;
+    Observed& f = frames_.back();
+    for (int s = 0; s < 2; ++s) {
+      if (sides[s] < 0) {
+        havePrevious_[s] = false;
+        continue;
+      }
+      const HandDetection<Scalar>& d = detections[static_cast<std::size_t>(sides[s])];
+      Side& o = f.side[s];
+      o.detected = true;
+      o.keypoints2d = d.keypoints2d;
+      o.keypoints3d = d.keypoints3d;
+      o.fitted = fitSide(s, o, opt_.camera, true);
+      info.valid[s] = o.fitted;
+    }
+    addTime("fit", t0);
+    info.slamStatus = trackFrame(image);
+    return info;
+  }
+
+  /// A frame with camera-frame hands from another regressor (null: that side not seen); they are
+  /// believed as a fit would be (in front of the camera, finite), and projected through the lens
+  /// for keypoints2d.
+  FrameInfo pushHands(const ImageU8& image, const std::array<const HandPose<Scalar>*, 2>& hands) {
+    checkFrame(image);
+    for (int s = 0; s < 2; ++s) {
+      if (hands[s]) checkPose(*hands[s], s);
+    }
+    frames_.emplace_back();
+    handsGiven_ = true;
+    FrameInfo info;
+    Observed& f = frames_.back();
+    for (int s = 0; s < 2; ++s) {
+      if (!hands[s]) continue;
+      Side& o = f.side[s];
+      const HandPose<Scalar>& p = *hands[s];
+      o.detected = true;
+      o.pose = p;
+      o.keypoints = forward(*models_[s], p).keypoints;
+      o.keypoints2d = Pixels<Scalar>::Constant(kKeypoints, 2, std::numeric_limits<Scalar>::quiet_NaN());
+      for (int k = 0; k < kKeypoints; ++k) {
+        const Vec3<Scalar> X = o.keypoints.row(k).transpose();
+        if (X(2) > Scalar(0)) o.keypoints2d.row(k) = lens_.project(X).transpose();
+      }
+      o.reprojRmsPx = Scalar(0);
+      o.fitted = believable(o);
+      info.detection[s] = o.detected ? s : -1;
+      info.valid[s] = o.fitted;
+    }
+    info.slamStatus = trackFrame(image);
+    return info;
+  }
+
+  /// The SLAM's finishing passes, the further passes with a refined focal, and the hands fitted
+  /// again with it. Call once, after the last frame.
+  const SlamResult<Scalar>& finishCamera() {
+    if (cameraDone_) throw Error("pipeline: finishCamera() called twice");
+    if (frames_.empty()) throw Error("pipeline: the video has no frames");
+    cameraDone_ = true;
+    auto t0 = Clock::now();
+    slam_result_ = slam_->finish();
+    slam_.reset();
+    addTime("slamFinish", t0);
+    const FocalRefineResult<Scalar> first = slam_result_.focal;
+    int passes = 1;
+    t0 = Clock::now();
+    const bool allKept = keepSlam_ && keptFrames_.size() == frames_.size();
+    while (slam_result_.focal.changed && allKept && passes < opt_.focalMaxPasses) {
+      PinholeCamera<Scalar> c = slamCam_;
+      c.fx = slam_result_.camera.fx, c.fy = slam_result_.camera.fy;
+      MonoSlam<Scalar> again(c, slamOptions(slamCam_.fx));
+      for (std::size_t t = 0; t < keptFrames_.size(); ++t) again.process(keptFrames_[t], keptMasks_[t].data.empty() ? nullptr : &keptMasks_[t]);
+      SlamResult<Scalar> r = again.finish();
+      if (!r.initialised && slam_result_.initialised) break;  // keep the previous pass
+      slam_result_ = std::move(r);
+      ++passes;
+    }
+    std::vector<ImageU8>().swap(keptFrames_);
+    std::vector<ImageU8>().swap(keptMasks_);
+    const Scalar sx = Scalar(slamCam_.width) / Scalar(opt_.camera.width), sy = Scalar(slamCam_.height) / Scalar(opt_.camera.height);
+    const FocalRefineResult<Scalar>& f = slam_result_.focal;
+    PipelineFocal<Scalar>& out = focal_;
+    out.passes = passes;
+    out.fx = opt_.camera.fx, out.fy = opt_.camera.fy;
+    bool changed = f.changed, accepted = f.accepted;
+    Scalar stdLog = f.stdLog, estimate = f.estimateFx;
+    std::string reason = f.reason;
+    if (passes > 1) {
+      addTime("slamRerun", t0);
+      changed = accepted = true;
+      stdLog = f.accepted ? f.stdLog : first.stdLog;
+      estimate = f.estimateFx > Scalar(0) ? f.estimateFx : slam_result_.camera.fx;
+      reason = first.reason + " (" + std::to_string(passes) + " SLAM passes)";
+    }
+    out.stdLog = accepted && std::isfinite(double(stdLog)) ? stdLog : std::numeric_limits<Scalar>::quiet_NaN();
+    out.estimateFx = estimate > Scalar(0) ? estimate / sx : std::numeric_limits<Scalar>::quiet_NaN();
+    out.reason = !opt_.refineFocal ? std::string("off") : reason;
+    if (changed) {
+      out.fx = slam_result_.camera.fx / sx;
+      out.fy = slam_result_.camera.fy / sy;
+      out.refined = true;
+    }
+    if (fitFailures_ > 0) warnings_.push_back("the hand fit failed on " + std::to_string(fitFailures_) + " detections (those frames count as unobserved)");
+    if (!slam_result_.initialised) {
+      warnings_.push_back(frames_.size() < 2 ? "a single frame: no camera motion can be estimated (identity pose)"
+                                             : "the SLAM did not initialise (too little camera translation or texture): the camera is held at the first pose");
+    }
+    if (out.refined && !handsGiven_) refit();
+    const int lost = slam_result_.count(SlamStatus::Lost);
+    if (lost > 0) warnings_.push_back("the camera was lost on " + std::to_string(lost) + " of " + std::to_string(frames_.size()) + " frames (their poses are interpolated or held)");
+    return slam_result_;
+  }
+
+  /// The frames of the SLAM's keyframes (after finishCamera): where a depth network runs.
+  std::vector<int> keyframeFrames() const {
+    std::vector<int> f;
+    for (const auto& d : slam_result_.keyframeDepths) f.push_back(d.frame);
+    return f;
+  }
+
+  /// The result. depthMaps: none, or one metric depth map per keyframe (keyframeFrames() order)
+  /// at the SLAM's size (metres, non-finite unknown; through a lens, of the rectified frame).
+  PipelineResult<Scalar> finish(const std::vector<const float*>& depthMaps = {}) {
+    if (!cameraDone_) finishCamera();
+    if (finished_) throw Error("pipeline: finish() called twice");
+    finished_ = true;
+    const int T = static_cast<int>(frames_.size());
+    PipelineResult<Scalar> res;
+    res.frames = T;
+    res.fps = opt_.fps;
+    res.camera = opt_.camera;
+    res.camera.fx = focal_.fx, res.camera.fy = focal_.fy;
+    res.lens = lens_.lens.toString();
+    res.focal = focal_;
+    res.slamCamera = slamCam_;
+    for (int s = 0; s < 2; ++s) collectCameraFrame(s, res.hands[s]);
+    res.noHands = !res.hands[0].present && !res.hands[1].present;
+    if (res.noHands) warnings_.push_back("no hands were found in the video");
+    auto t0 = Clock::now();
+    metricScale(res, depthMaps);
+    addTime("scale", t0);
+    const Scalar s = scale_ = res.scale;
+    for (const SE3<Scalar>& P : slam_result_.poses) res.cameraPoses.emplace_back(P.rotation(), Vec3<Scalar>(s * P.translation()));
+    for (const Vec3<Scalar>& X : slam_result_.points) res.points.push_back(s * X);
+    for (int side = 0; side < 2; ++side) toWorld(side, res.hands[side]);
+    res.slam = std::move(slam_result_);
+    res.warnings = warnings_;
+    res.timings = timings_;
+    return res;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  static constexpr int kKeypoints = 21;
+
+  /// One side's observation in one frame.
+  struct Side {
+    bool detected = false, fitted = false;
+    Pixels<Scalar> keypoints2d;   ///< (21, 2) image pixels (through the lens)
+    Points3<Scalar> keypoints3d;  ///< (21, 3) the network's metric keypoints, or empty
+    HandPose<Scalar> pose;        ///< camera frame (when fitted)
+    Points3<Scalar> keypoints;    ///< (21, 3) fitted keypoints, camera frame
+    Scalar reprojRmsPx = std::numeric_limits<Scalar>::quiet_NaN();
+  };
+  struct Observed {
+    std::array<Side, 2> side;
+  };
+
+  void addTime(const char* stage, Clock::time_point t0) {
+    timings_[stage] += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  }
+
+  Scalar reach() const { return Scalar(0.15) * std::hypot(Scalar(opt_.camera.width), Scalar(opt_.camera.height)); }
+
+  SlamOptions<Scalar> slamOptions(Scalar priorFx) const {
+    SlamOptions<Scalar> o;
+    o.useMasks = true;
+    o.finish.refineFocal = opt_.refineFocal;
+    o.rollingShutter = opt_.readout * opt_.fps;
+    o.focal.priorSigmaLog = opt_.priorSigma();
+    if (priorFx > Scalar(0)) {
+      o.finish.refineFocal = true;
+      o.focal.priorFx = priorFx;
+    }
+    if (!opt_.slamSet.empty()) setSlamOptions(o, opt_.slamSet);
+    return o;
+  }
+
+  /// Throws for a frame that is neither the video's nor the SLAM's grey one (nothing is kept).
+  void checkFrame(const ImageU8& image) const {
+    if (cameraDone_) throw Error("pipeline: push() after finish");
+    const int T = static_cast<int>(frames_.size());
+    if (!image.consistent() || image.width <= 0 || image.height <= 0) throw Error("pipeline: frame " + std::to_string(T) + " is empty");
+    const bool video = image.width == opt_.camera.width && image.height == opt_.camera.height &&
+                       (image.channels == 1 || image.channels == 3 || image.channels == 4);
+    const bool slamGrey = image.width == slamCam_.width && image.height == slamCam_.height && image.channels == 1;
+    if (!video && !slamGrey) {
+      throw Error("pipeline: frame " + std::to_string(T) + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+                  std::to_string(image.channels) + ", expected the video's " + std::to_string(opt_.camera.width) + "x" +
+                  std::to_string(opt_.camera.height) + " (1, 3 or 4 channels) or the SLAM's grey " + std::to_string(slamCam_.width) + "x" +
+                  std::to_string(slamCam_.height));
+    }
+  }
+
+  void checkDetection(const HandDetection<Scalar>& d, std::size_t i) const {
+    const std::string what = "pipeline: frame " + std::to_string(frames_.size()) + ", detection " + std::to_string(i);
+    if (d.keypoints2d.rows() != kKeypoints) throw Error(what + ": " + std::to_string(d.keypoints2d.rows()) + " keypoints, expected 21");
+    if (!d.keypoints2d.allFinite()) throw Error(what + ": keypoints are not finite");
+    if (d.keypoints3d.size() > 0 && (d.keypoints3d.rows() != kKeypoints || !d.keypoints3d.allFinite())) {
+      throw Error(what + ": keypoints3d must be 21 finite points or empty");
+    }
+    if (!(d.pRight >= Scalar(0) && d.pRight <= Scalar(1))) throw Error(what + ": pRight must be in [0, 1]");
+  }
+
+  void checkPose(const HandPose<Scalar>& p, int s) const {
+    const std::string what = "pipeline: frame " + std::to_string(frames_.size()) + ", the " + sideName(s) + " hand";
+    if (p.jointPose.rows() != models_[s]->numJoints() - 1 || p.jointPose.cols() != 3) {
+      throw Error(what + ": " + std::to_string(p.jointPose.rows()) + " joint rotations, the model has " + std::to_string(models_[s]->numJoints() - 1));
+    }
+    if (p.betas.size() > models_[s]->numBetas()) throw Error(what + ": " + std::to_string(p.betas.size()) + " betas, the model has " + std::to_string(models_[s]->numBetas()));
+    if (!p.globalOrient.allFinite() || !p.jointPose.allFinite() || !p.betas.allFinite() || !p.transl.allFinite()) throw Error(what + ": parameters are not finite");
+  }
+
+  bool believable(const Side& o) const {
+    const Scalar z = o.pose.transl(2);
+    return z > opt_.minHandDepth && z < opt_.maxHandDepth && std::isfinite(double(o.reprojRmsPx));
+  }
+
+  /// The fit of side s to its keypoints with intrinsics K (through the lens: undistorted first).
+  /// firstPass: a failed fit counts, and an implausible one keeps the warm start (as it was
+  /// found); in the refit an implausible one breaks the track.
+  bool fitSide(int s, Side& o, const PinholeCamera<Scalar>& K, bool firstPass) {
+    HandObservation<Scalar> obs;
+    obs.keypoints2d = o.keypoints2d;
+    if (withLens_) {
+      CameraModel<Scalar> c{K, lens_.lens};
+      obs.confidence2d = VecX<Scalar>::Zero(kKeypoints);
+      for (int k = 0; k < kKeypoints; ++k) {
+        Vec2<Scalar> u;
+        if (c.undistortPixel(Vec2<Scalar>(o.keypoints2d(k, 0), o.keypoints2d(k, 1)), u) && u.allFinite()) {
+          obs.keypoints2d.row(k) = u.transpose();
+          obs.confidence2d(k) = Scalar(1);
+        } else {
+          obs.keypoints2d.row(k).setZero();
+        }
+      }
+    }
+    if (o.keypoints3d.size() > 0) obs.keypoints3d = o.keypoints3d;
+    HandFitResult<Scalar> r;
+    try {
+      r = fitters_[s].fit(obs, K, fitOptions_, havePrevious_[s] ? &previous_[s] : nullptr);
+    } catch (const std::exception&) {
+      havePrevious_[s] = false;
+      if (firstPass) ++fitFailures_;
+      return false;
+    }
+    previous_[s] = r.pose;
+    havePrevious_[s] = true;
+    o.pose = r.pose;
+    o.keypoints = r.keypoints;
+    o.reprojRmsPx = r.reprojRmsPx;
+    const bool ok = believable(o);
+    if (!ok && !firstPass) havePrevious_[s] = false;
+    return ok;
+  }
+
+  /// Masks, the SLAM's frame and the SLAM on the current frame.
+  SlamStatus trackFrame(const ImageU8& image) {
+    Observed& f = frames_.back();
+    auto t0 = Clock::now();
+    std::vector<HandMaskHand<Scalar>> hands;
+    for (int s = 0; s < 2; ++s) {
+      if (!f.side[s].fitted) continue;
+      HandMaskHand<Scalar> h;
+      h.model = models_[s];
+      h.pose = f.side[s].pose;
+      hands.push_back(std::move(h));
+    }
+    Mask mask;
+    if (!hands.empty()) renderHandMasks(hands, slamCam_, opt_.maskDilatePx, mask);
+    if (opt_.depthMasks) depthMasks_.push_back(mask);
+    addTime("masks", t0);
+    t0 = Clock::now();
+    const bool atSlamSize = image.width == slamCam_.width && image.height == slamCam_.height;
+    // At the SLAM's own size the SLAM converts to grey itself.
+    const ImageU8* slamFrame = &image;
+    if (!atSlamSize || (withLens_ && image.channels != 1)) {
+      grey_.resize(slamCam_.width, slamCam_.height, 1);
+      downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
+      slamFrame = &grey_;
+    }
+    const ImageU8* slamMask = mask.data.empty() ? nullptr : &mask;
+    if (rectify_) {
+      rectified_ = rectify_->remapBilinear(*slamFrame);
+      slamFrame = &rectified_;
+      slamMask = nullptr;
+      if (rectify_->needsSlamMask(mask.data.empty() ? nullptr : mask.data.data())) {
+        rectMask_.resize(slamCam_.width, slamCam_.height, 1);
+        rectify_->slamMask(mask.data.empty() ? nullptr : mask.data.data(), rectMask_.data.data());
+        slamMask = &rectMask_;
+      }
+    }
+    if (keepSlam_) keepForRerun(*slamFrame, slamMask);
+    addTime("slamPrep", t0);
+    t0 = Clock::now();
+    const SlamStatus st = slam_->process(*slamFrame, slamMask);
+    addTime("slam", t0);
+    return st;
+  }
+
+  void keepForRerun(const ImageU8& frame, const ImageU8* mask) {
+    const std::size_t n = static_cast<std::size_t>(slamCam_.width) * static_cast<std::size_t>(slamCam_.height);
+    if (keptBytes_ + 2 * n > opt_.focalRerunBytes) {
+      // too long a video for a second SLAM pass: the focal is refined in the final BA only
+      keepSlam_ = false;
+      std::vector<ImageU8>().swap(keptFrames_);
+      std::vector<ImageU8>().swap(keptMasks_);
+      return;
+    }
+    ImageU8 g;
+    if (frame.channels == 1) {
+      g = frame;
+    } else {
+      g.resize(frame.width, frame.height, 1);
+      downscaleBox(frame.data.data(), frame.width, frame.height, frame.channels, frame.width, frame.height, true, g.data.data());
+    }
+    keptBytes_ += g.data.size() + (mask ? mask->data.size() : 0);
+    keptFrames_.push_back(std::move(g));
+    keptMasks_.push_back(mask ? *mask : ImageU8());
+  }
+
+  /// The hands fitted again at the refined focal, frame by frame as the first time.
+  void refit() {
+    const auto t0 = Clock::now();
+    PinholeCamera<Scalar> K = opt_.camera;
+    K.fx = focal_.fx, K.fy = focal_.fy;
+    for (int s = 0; s < 2; ++s) {
+      havePrevious_[s] = false;
+      bool prevOk = false;
+      for (Observed& f : frames_) {
+        Side& o = f.side[s];
+        if (!o.detected) {
+          if (prevOk) havePrevious_[s] = false;
+          prevOk = false;
+          continue;
+        }
+        o.fitted = fitSide(s, o, K, false);
+        prevOk = o.fitted;
+      }
+    }
+    addTime("refit", t0);
+  }
+
+  /// Side s's camera-frame arrays (NaN where not observed).
+  void collectCameraFrame(int s, PipelineHand<Scalar>& h) const {
+    const Eigen::Index T = static_cast<Eigen::Index>(frames_.size());
+    const Eigen::Index P = 3 * (models_[s]->numJoints() - 1), B = models_[s]->numBetas();
+    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    h.valid.assign(static_cast<std::size_t>(T), 0);
+    h.camera.rot = Sequence<Scalar>::Constant(T, 3, nan);
+    h.camera.trans = Sequence<Scalar>::Constant(T, 3, nan);
+    h.camera.hand_pose = Sequence<Scalar>::Constant(T, P, nan);
+    h.camera.betas = Sequence<Scalar>::Constant(T, B, nan);
+    h.jointsCam = Sequence<Scalar>::Constant(T, 3 * kKeypoints, nan);
+    h.keypoints2d = Sequence<Scalar>::Constant(T, 2 * kKeypoints, nan);
+    h.reprojRmsPx.assign(static_cast<std::size_t>(T), nan);
+    for (Eigen::Index t = 0; t < T; ++t) {
+      const Side& o = frames_[static_cast<std::size_t>(t)].side[s];
+      if (o.detected) h.keypoints2d.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 2 * kKeypoints>>(o.keypoints2d.data());
+      if (!o.fitted) continue;
+      h.valid[static_cast<std::size_t>(t)] = 1;
+      h.camera.rot.row(t) = o.pose.globalOrient.transpose();
+      h.camera.trans.row(t) = o.pose.transl.transpose();
+      h.camera.hand_pose.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, Eigen::Dynamic>>(o.pose.jointPose.data(), P);
+      const Eigen::Index nb = std::min<Eigen::Index>(B, o.pose.betas.size());
+      if (nb > 0) h.camera.betas.row(t).head(nb) = o.pose.betas.head(nb).transpose();
+      h.jointsCam.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 3 * kKeypoints>>(o.keypoints.data());
+      h.reprojRmsPx[static_cast<std::size_t>(t)] = o.reprojRmsPx;
+    }
+    h.camera.valid = h.valid;
+    h.present = std::any_of(h.valid.begin(), h.valid.end(), [](std::uint8_t v) { return v != 0; });
+  }
+
+  /// The metric scale from the cues at hand; res.scale is 1 with method "none" when none gave one.
+  void metricScale(PipelineResult<Scalar>& res, const std::vector<const float*>& depthMaps) {
+    const int T = static_cast<int>(frames_.size());
+    std::vector<HandTrack<Scalar>> wrists;
+    for (int s = 0; s < 2; ++s) {
+      const PipelineHand<Scalar>& h = res.hands[s];
+      if (!h.present) continue;
+      HandTrack<Scalar> track;
+      for (int t = 0; t < T; ++t) {
+        const bool v = h.valid[static_cast<std::size_t>(t)] != 0;
+        track.positionCam.push_back(v ? Vec3<Scalar>(h.jointsCam(t, 0), h.jointsCam(t, 1), h.jointsCam(t, 2)) : Vec3<Scalar>(0, 0, 1));
+        track.valid.push_back(v ? 1 : 0);
+      }
+      if (opt_.handScaleSmooth > 0) smoothTrack(track, opt_.handScaleSmooth);
+      wrists.push_back(std::move(track));
+    }
+    std::vector<KeyframeDepthPairs<Scalar>> keyframes;
+    if (!depthMaps.empty()) {
+      const auto& kd = slam_result_.keyframeDepths;
+      if (depthMaps.size() != kd.size()) {
+        throw Error("pipeline: " + std::to_string(depthMaps.size()) + " depth maps for " + std::to_string(kd.size()) + " keyframes");
+      }
+      for (std::size_t k = 0; k < kd.size(); ++k) {
+        std::vector<Scalar> uv;
+        for (const auto& p : kd[k].uv) uv.insert(uv.end(), {p(0), p(1)});
+        const Mask* m = opt_.depthMasks ? &depthMasks_[static_cast<std::size_t>(kd[k].frame)] : nullptr;
+        keyframes.push_back(pairKeyframeDepths(uv.data(), kd[k].depth.data(), kd[k].depth.size(), depthMaps[k], slamCam_.width, slamCam_.height,
+                                               m && !m->data.empty() ? m->data.data() : nullptr));
+      }
+    }
+    const bool havePoints = opt_.groundScale && !slam_result_.points.empty();
+    bool got = false;
+    if (slam_result_.initialised && (!wrists.empty() || !keyframes.empty() || havePoints)) {
+      MetricScaleOptions<Scalar> mo;
+      mo.setFps(opt_.fps);
+      mo.ground.eyeHeight = opt_.eyeHeight;
+      const std::vector<Vec3<Scalar>> none;
+      try {
+        res.scaleCues = estimateMetricScale(keyframes, slam_result_.poses, wrists, mo, havePoints ? &slam_result_.points : &none);
+        got = res.scaleCues.fused.ok();
+      } catch (const std::exception& e) {
+        warnings_.push_back(std::string("metric scale: ") + e.what());
+      }
+    }
+    if (got && std::isfinite(double(res.scaleCues.fused.scale)) && res.scaleCues.fused.scale > Scalar(0)) {
+      res.scale = res.scaleCues.fused.scale;
+      res.scaleMethod = res.scaleCues.fused.method;
+      res.scaleConfidence = res.scaleCues.fused.confidence;
+      if (res.scaleConfidence < Scalar(0.4)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "the metric scale is uncertain (method %s, confidence %.2f)", res.scaleMethod.c_str(), double(res.scaleConfidence));
+        warnings_.push_back(buf);
+      }
+    } else {
+      // No metric cue: the SLAM's own units, flagged (the trajectory's shape is still right).
+      res.scale = Scalar(1);
+      res.scaleMethod = "none";
+      res.scaleConfidence = Scalar(0);
+      if (slam_result_.initialised) {
+        warnings_.push_back("no metric scale could be estimated (no depth model, no usable hand cue, no floor in the map): the camera trajectory is in the SLAM's arbitrary units");
+      }
+    }
+  }
+
+  /// Centred moving average (half-width k, symmetric: no lag) within each run of valid frames.
+  static void smoothTrack(HandTrack<Scalar>& h, int k) {
+    const std::vector<Vec3<Scalar>> src = h.positionCam;
+    const int T = static_cast<int>(src.size());
+    for (int t = 0; t < T; ++t) {
+      if (!h.valid[static_cast<std::size_t>(t)]) continue;
+      int lo = t, hi = t;
+      while (lo > t - k && lo > 0 && h.valid[static_cast<std::size_t>(lo - 1)]) --lo;
+      while (hi < t + k && hi < T - 1 && h.valid[static_cast<std::size_t>(hi + 1)]) ++hi;
+      const int w = std::min(t - lo, hi - t);
+      Vec3<Scalar> sum = Vec3<Scalar>::Zero();
+      for (int u = t - w; u <= t + w; ++u) sum += src[static_cast<std::size_t>(u)];
+      h.positionCam[static_cast<std::size_t>(t)] = sum / Scalar(2 * w + 1);
+    }
+  }
+
+  /// Side s's motion in the world (metres), the unseen frames filled, and its keypoints.
+  void toWorld(int s, PipelineHand<Scalar>& h) {
+    const Eigen::Index T = static_cast<Eigen::Index>(frames_.size());
+    const HandModel<Scalar>& model = *models_[s];
+    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    h.infilled.assign(static_cast<std::size_t>(T), 0);
+    if (!h.present) {
+      h.world = h.camera;
+      h.jointsWorld = Sequence<Scalar>::Constant(T, 3 * kKeypoints, nan);
+      return;
+    }
+    auto t0 = Clock::now();
+    // cameraToWorld wants finite numbers everywhere: unobserved frames hold zeros
+    HandMotion<Scalar> cam = h.camera;
+    for (Sequence<Scalar>* a : {&cam.rot, &cam.trans, &cam.hand_pose, &cam.betas}) *a = a->unaryExpr([](Scalar v) { return std::isfinite(double(v)) ? v : Scalar(0); });
+    std::vector<Mat3<Scalar>> R;
+    std::vector<Vec3<Scalar>> t;
+    for (const SE3<Scalar>& P : slam_result_.poses) {
+      R.push_back(P.rotationMatrix());
+      t.push_back(P.translation() * scale_);
+    }
+    HandMotion<Scalar> world = cameraToWorld(cam, R, t, restRootJoints(model, cam));
+    addTime("world", t0);
+    t0 = Clock::now();
+    for (Eigen::Index f = 0; f < T; ++f) {
+      if (h.valid[static_cast<std::size_t>(f)]) continue;
+      for (Sequence<Scalar>* a : {&world.rot, &world.trans, &world.hand_pose, &world.betas}) a->row(f).setConstant(nan);
+    }
+    InfillOptions<Scalar> io;
+    io.method = opt_.infill;
+    const InfillResult<Scalar> filled = infillHand(world, restRootJoints(model, world), io);
+    h.world = filled.motion;
+    h.infilled = filled.filled;
+    addTime("infill", t0);
+    t0 = Clock::now();
+    h.jointsWorld.resize(T, 3 * kKeypoints);
+    for (Eigen::Index f = 0; f < T; ++f) {
+      HandPose<Scalar> p = HandPose<Scalar>::zero(model);
+      p.globalOrient = h.world.rot.row(f).transpose();
+      p.transl = h.world.trans.row(f).transpose();
+      std::copy(h.world.hand_pose.row(f).data(), h.world.hand_pose.row(f).data() + h.world.hand_pose.cols(), p.jointPose.data());
+      if (h.world.betas.cols() > 0) p.betas = h.world.betas.row(f).transpose();
+      const Points3<Scalar> kp = forward(model, p).keypoints;
+      h.jointsWorld.row(f) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 3 * kKeypoints>>(kp.data());
+    }
+    addTime("joints", t0);
+  }
+
+  PipelineOptions<Scalar> opt_;
+  std::array<const HandModel<Scalar>*, 2> models_;
+  std::array<HandFitter<Scalar>, 2> fitters_;
+  HandFitOptions<Scalar> fitOptions_;
+  std::array<HandPose<Scalar>, 2> previous_;
+  std::array<bool, 2> havePrevious_{false, false};
+  CameraModel<Scalar> lens_;
+  bool withLens_ = false;
+  PinholeCamera<Scalar> slamCam_;
+  std::unique_ptr<RectifyMap<Scalar>> rectify_;
+  std::unique_ptr<MonoSlam<Scalar>> slam_;
+  SlamResult<Scalar> slam_result_;
+  SideState<Scalar> sideState_;
+  std::vector<Observed> frames_;
+  std::vector<Mask> depthMasks_;
+  bool keepSlam_ = false;
+  std::size_t keptBytes_ = 0;
+  std::vector<ImageU8> keptFrames_, keptMasks_;
+  ImageU8 grey_, rectified_, rectMask_;
+  int fitFailures_ = 0;
+  bool handsGiven_ = false, cameraDone_ = false, finished_ = false;
+  PipelineFocal<Scalar> focal_;
+  Scalar scale_ = Scalar(1);  ///< metres per SLAM unit (finish)
+  std::vector<std::string> warnings_;
+  std::map<std::string, double> timings_;
+};
+
+}  // namespace hawor

@@ -1,0 +1,263 @@
+// The pipeline object (pipeline/pipeline.hpp) on synthetic sequences with ground truth: the side
+// policy, camera-frame hands from another regressor (pushHands) and detections fitted (push)
+// taken to a metric world, and bad input. Native only (the WebAssembly core's Pipeline is run by
+// tests/web/pipeline_native_wasm.test.mjs against `hawor world`).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "hawor/geometry/alignment.hpp"
+#include "hawor/hand/mirror.hpp"
+#include "hawor/hand/synthetic_hand.hpp"
+#include "hawor/pipeline/pipeline.hpp"
+#include "hawor/synth/synth.hpp"
+
+template class hawor::Pipeline<float>;
+template class hawor::Pipeline<double>;
+
+namespace {
+
+namespace hs = hawor::synth;
+using V3 = hawor::Vec3<double>;
+
+const hawor::HandModel<double>& rightModel() {
+  static const hawor::HandModel<double> r = hawor::makeSyntheticHand<double>();
+  return r;
+}
+const hawor::HandModel<double>& leftModel() {
+  static const hawor::HandModel<double> l = hawor::mirrorHandModel(rightModel());
+  return l;
+}
+
+hawor::HandDetection<double> det(double x, double pRight, int track = -1) {
+  hawor::HandDetection<double> d;
+  d.keypoints2d = hawor::Pixels<double>::Zero(21, 2);
+  d.keypoints2d(0, 0) = x, d.keypoints2d(0, 1) = 500;
+  d.pRight = pRight;
+  d.track = track;
+  return d;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? NAN : v[v.size() / 2];
+}
+
+struct Outcome {
+  hawor::PipelineResult<double> result;
+  std::vector<V3> gtCam;                  // camera centres, room frame
+  std::vector<std::array<V3, 2>> gtWrist;  // world wrists (room frame), NaN where the hand is unseen
+  std::vector<std::array<V3, 2>> gtWristCam;
+  std::vector<std::array<bool, 2>> seen;
+};
+
+/// `frames` frames of a preset through the pipeline: the ground-truth camera-frame hands
+/// (pushHands) or their keypoints as detections (push: 2D projections, metric 3D keypoints).
+Outcome runPipeline(const std::string& preset, int frames, bool detections, std::uint64_t seed = 1) {
+  hs::SynthOptions so;
+  so.width = 640;
+  so.height = 480;
+  so.frames = frames;
+  so.textureDivisor = 2;
+  hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftModel(), rightModel(), so);
+  hawor::PipelineOptions<double> po;
+  po.camera = seq.camera();
+  po.userFocal = true;
+  po.refineFocal = false;
+  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  Outcome o;
+  hs::SynthFrame<double> fr;
+  for (int i = 0; i < seq.numFrames(); ++i) {
+    seq.renderFrame(i, fr);
+    o.gtCam.push_back(fr.worldFromCamera.t);
+    std::array<V3, 2> w, wc;
+    std::array<bool, 2> seen{};
+    std::array<const hawor::HandPose<double>*, 2> given{nullptr, nullptr};
+    std::vector<hawor::HandDetection<double>> dets;
+    for (int s = 0; s < 2; ++s) {
+      const auto& h = fr.hands[s];
+      seen[s] = h.valid;
+      w[s] = h.jointsWorld.row(0).transpose();
+      wc[s] = h.jointsCam.row(0).transpose();
+      if (!h.valid) continue;
+      given[s] = &h.camera;
+      hawor::HandDetection<double> d;
+      d.keypoints2d.resize(21, 2);
+      for (int k = 0; k < 21; ++k) d.keypoints2d.row(k) = seq.camera().project(V3(h.jointsCam.row(k).transpose())).transpose();
+      d.keypoints3d = h.jointsCam;
+      d.pRight = s == 1 ? 0.9 : 0.1;
+      dets.push_back(d);
+    }
+    o.gtWrist.push_back(w);
+    o.gtWristCam.push_back(wc);
+    o.seen.push_back(seen);
+    if (detections) {
+      p.push(fr.images.rgb, dets);
+    } else {
+      p.pushHands(fr.images.rgb, given);
+    }
+  }
+  o.result = p.finish();
+  return o;
+}
+
+/// The Sim(3) that maps the estimated camera centres onto the ground truth's.
+hawor::SimilarityTransform<double> alignCameras(const Outcome& o) {
+  hawor::Points3<double> est(static_cast<Eigen::Index>(o.gtCam.size()), 3), gt(est.rows(), 3);
+  for (Eigen::Index t = 0; t < est.rows(); ++t) {
+    est.row(t) = o.result.cameraPoses[static_cast<std::size_t>(t)].translation().transpose();
+    gt.row(t) = o.gtCam[static_cast<std::size_t>(t)].transpose();
+  }
+  return hawor::umeyama(est, gt, true);
+}
+
+}  // namespace
+
+TEST_CASE("pipeline sides: track continuity, side memory over a short gap, two hands ordered left to right", "[pipeline]") {
+  const double reach = 300;
+  hawor::SideState<double> prev;
+  // a track keeps its side against its own evidence while it is alone
+  std::vector<hawor::HandDetection<double>> d{det(400, 0.1, 7)};
+  hawor::updateSideState(prev, d, {0, -1});
+  d = {det(420, 0.95, 7)};
+  CHECK(hawor::assignSides(d, prev, reach) == std::array<int, 2>{0, -1});
+  // a side empty for a frame or two still pulls a hand that comes back where it was
+  prev = {};
+  d = {det(400, 0.2)};
+  hawor::updateSideState(prev, d, {0, -1});
+  hawor::updateSideState(prev, d, {-1, -1});
+  CHECK(prev.age[0] == 2);
+  d = {det(430, 0.7)};
+  CHECK(hawor::assignSides(d, prev, reach)[0] == 0);
+  for (int k = 0; k < 10; ++k) hawor::updateSideState(prev, d, {-1, -1});
+  CHECK(hawor::assignSides(d, prev, reach)[1] == 0);  // long gone: the label decides
+  // two hands whose tracks both say right: the one on the left is the left hand
+  prev = {};
+  d = {det(900, 0.99, 1), det(300, 0.99, 2)};
+  CHECK(hawor::assignSides(d, prev, reach) == std::array<int, 2>{1, 0});
+  // even against both tracks' continuity when their evidence is unsure
+  d = {det(900, 0.5, 1), det(300, 0.5, 2)};
+  hawor::updateSideState(prev, d, {0, 1});
+  CHECK(prev.track[0] == 1);
+  CHECK(hawor::assignSides(d, prev, reach) == std::array<int, 2>{1, 0});
+  // a crossing that both tracks' confident evidence supports is kept
+  d = {det(900, 0.02, 1), det(300, 0.98, 2)};
+  CHECK(hawor::assignSides(d, prev, reach) == std::array<int, 2>{0, 1});
+  // a track takes its side from the other one
+  hawor::updateSideState(prev, d, {1, -1});
+  CHECK(prev.track[0] == 2);
+  CHECK(prev.track[1] == -1);
+  CHECK(hawor::assignSides(std::vector<hawor::HandDetection<double>>{}, prev, reach) == std::array<int, 2>{-1, -1});
+  // the SLAM's frame size: the long side at most 640, the aspect kept
+  CHECK(hawor::pipelineSlamSize(1920, 1080, 640) == std::array<int, 2>{640, 360});
+  CHECK(hawor::pipelineSlamSize(320, 240, 640) == std::array<int, 2>{320, 240});
+}
+
+TEST_CASE("pipeline: camera-frame hands from another regressor to a metric world (table_work, 60 frames)", "[pipeline]") {
+  const Outcome o = runPipeline("table_work", 60, false);
+  const hawor::PipelineResult<double>& r = o.result;
+  REQUIRE(r.frames == 60);
+  REQUIRE(r.slam.initialised);
+  const hawor::SimilarityTransform<double> S = alignCameras(o);
+  double path = 0, se = 0;
+  for (std::size_t t = 1; t < o.gtCam.size(); ++t) path += (o.gtCam[t] - o.gtCam[t - 1]).norm();
+  for (std::size_t t = 0; t < o.gtCam.size(); ++t) se += (S.apply(V3(r.cameraPoses[t].translation())) - o.gtCam[t]).squaredNorm();
+  const double atePct = 100 * std::sqrt(se / double(o.gtCam.size())) / path;
+  INFO("camera ATE " << atePct << " % of " << path << " m; scale " << r.scale << " (" << r.scaleMethod << ", confidence " << r.scaleConfidence
+                     << "), alignment scale " << S.s);
+  CHECK(atePct < 2.0);
+  // the metric scale from the hands: the aligned trajectory needs little rescaling
+  CHECK(r.scaleMethod != "none");
+  CHECK(std::abs(std::log(S.s)) < std::log(1.3));
+  // camera-frame hands are passed through; world wrists land on the truth under the cameras' Sim(3)
+  std::vector<double> err, errCam;
+  for (int s = 0; s < 2; ++s) {
+    const hawor::PipelineHand<double>& h = r.hands[s];
+    for (std::size_t t = 0; t < o.seen.size(); ++t) {
+      if (!o.seen[t][s]) {
+        CHECK(!h.valid[t]);
+        continue;
+      }
+      REQUIRE(h.valid[t]);
+      errCam.push_back((V3(h.jointsCam(static_cast<Eigen::Index>(t), 0), h.jointsCam(static_cast<Eigen::Index>(t), 1), h.jointsCam(static_cast<Eigen::Index>(t), 2)) -
+                        o.gtWristCam[t][s]).norm());
+      const V3 w(h.jointsWorld(static_cast<Eigen::Index>(t), 0), h.jointsWorld(static_cast<Eigen::Index>(t), 1), h.jointsWorld(static_cast<Eigen::Index>(t), 2));
+      err.push_back((S.apply(w) - o.gtWrist[t][s]).norm());
+    }
+  }
+  REQUIRE(err.size() > 20);
+  CHECK(median(errCam) < 1e-9);
+  INFO("world wrist error, median " << median(err) << " m");
+  CHECK(median(err) < 0.05);
+  CHECK(r.timings.count("slam") == 1);
+}
+
+TEST_CASE("pipeline: detections fitted, sides kept, masks for the SLAM (hands_cover, 40 frames)", "[pipeline]") {
+  const Outcome o = runPipeline("hands_cover", 40, true, 2);
+  const hawor::PipelineResult<double>& r = o.result;
+  std::vector<double> errCam;
+  int seen = 0;
+  for (int s = 0; s < 2; ++s) {
+    for (std::size_t t = 0; t < o.seen.size(); ++t) {
+      if (!o.seen[t][s]) continue;
+      ++seen;
+      if (!r.hands[s].valid[t]) continue;
+      const auto& j = r.hands[s].jointsCam;
+      const Eigen::Index i = static_cast<Eigen::Index>(t);
+      errCam.push_back((V3(j(i, 0), j(i, 1), j(i, 2)) - o.gtWristCam[t][s]).norm());
+      CHECK(r.hands[s].reprojRmsPx[t] < 2.0);
+    }
+  }
+  INFO(errCam.size() << " of " << seen << " hand-frames fitted; wrist error median " << median(errCam) << " m");
+  REQUIRE(seen > 10);
+  CHECK(errCam.size() == static_cast<std::size_t>(seen));  // every seen hand believed, on its own side
+  CHECK(median(errCam) < 0.01);
+  for (int s = 0; s < 2; ++s) {
+    if (!r.hands[s].present) continue;
+    for (std::size_t t = 0; t < o.seen.size(); ++t) CHECK(std::isfinite(r.hands[s].jointsWorld(static_cast<Eigen::Index>(t), 0)));  // filled
+  }
+}
+
+TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]") {
+  hawor::PipelineOptions<double> po;
+  po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;
+  {
+    hawor::PipelineOptions<double> bad = po;
+    bad.fps = 0;
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("fps"));
+    bad = po;
+    bad.lens = "fisheye:nan,0,0,0";
+    CHECK_THROWS((hawor::Pipeline<double>(bad, leftModel(), rightModel())));
+    bad = po;
+    bad.eyeHeight = 12;
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("height above the floor"));
+    bad = po;
+    bad.slamSet = "noSuchOption=1";
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("noSuchOption"));
+  }
+  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  CHECK_THROWS_WITH(p.finishCamera(), Catch::Contains("no frames"));
+  hawor::ImageU8 wrong(320, 200, 3);
+  CHECK_THROWS_WITH(p.push(wrong, {}), Catch::Contains("320x200x3"));
+  hawor::ImageU8 im(640, 480, 3, 100);
+  std::vector<hawor::HandDetection<double>> d{det(100, 0.5)};
+  d[0].keypoints2d(3, 1) = NAN;
+  CHECK_THROWS_WITH(p.push(im, d), Catch::Contains("detection 0: keypoints are not finite"));
+  d[0].keypoints2d(3, 1) = 1;
+  d[0].pRight = 2;
+  CHECK_THROWS_WITH(p.push(im, d), Catch::Contains("pRight"));
+  hawor::HandPose<double> nanPose = hawor::HandPose<double>::zero(leftModel());
+  nanPose.transl(0) = NAN;
+  CHECK_THROWS_WITH(p.pushHands(im, {&nanPose, nullptr}), Catch::Contains("the left hand: parameters are not finite"));
+  // a grey frame at the SLAM's size is taken as it is, then one frame gives a held camera
+  hawor::ImageU8 grey(640, 480, 1, 90);
+  p.push(grey, {});
+  const hawor::PipelineResult<double> r = p.finish();
+  CHECK(r.frames >= 1);
+  CHECK(r.noHands);
+  CHECK(std::find_if(r.warnings.begin(), r.warnings.end(), [](const std::string& w) { return w.find("no hands") != std::string::npos; }) != r.warnings.end());
+  CHECK_THROWS_WITH(p.finish(), Catch::Contains("twice"));
+  CHECK_THROWS_WITH(p.push(im, {}), Catch::Contains("after finish"));
+}
