@@ -89,67 +89,13 @@
 #include "hawor/render/resample.hpp"
 #include "hawor/slam/mono_slam.hpp"
 #include "hawor/slam/slam_option_table.hpp"
+#include "marshal.hpp"
 
 using emscripten::val;
 
 namespace {
 
-// --- marshalling ---------------------------------------------------------------------------------
-
-template <typename T>
-std::vector<T> fromTyped(const val& a) {
-  return emscripten::convertJSArrayToNumberVector<T>(a);
-}
-
-template <typename T>
-val toTyped(const T* data, size_t n, const char* ctor) {
-  // typed_memory_view aliases the heap; constructing a new typed array copies it out.
-  return val::global(ctor).new_(emscripten::typed_memory_view(n, data));
-}
-val f64(const double* d, size_t n) { return toTyped(d, n, "Float64Array"); }
-
-bool absent(const val& v) { return v.isNull() || v.isUndefined(); }
-
-/// A typed array (or array) of exactly n numbers; `what` names it in the error.
-template <typename T = double>
-std::vector<T> exactly(const val& a, size_t n, const std::string& what) {
-  if (absent(a)) throw hawor::Error(what + ": missing (expected " + std::to_string(n) + " numbers)");
-  std::vector<T> v = fromTyped<T>(a);
-  if (v.size() != n) {
-    throw hawor::Error(what + ": length " + std::to_string(v.size()) + ", expected " + std::to_string(n));
-  }
-  return v;
-}
-
-/// Runs f; a C++ exception becomes a JavaScript Error thrown once f's frames are gone (a JS
-/// exception crossing C++ frames would skip their destructors).
-template <typename F>
-auto guard(const char* fn, F&& f) -> decltype(f()) {
-  std::optional<val> err;
-  try {
-    return f();
-  } catch (const std::exception& e) {
-    err = val::global("Error").new_(std::string(fn) + ": " + e.what());
-  }
-  err->set("name", "HaworError");
-  err->throw_();
-}
-
-hawor::PinholeCamera<double> camera(const val& intrinsics, int width, int height) {
-  const std::vector<double> k = exactly(intrinsics, 4, "intrinsics [fx, fy, cx, cy]");
-  hawor::PinholeCamera<double> c;
-  c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
-  c.width = width, c.height = height;
-  c.validate();
-  return c;
-}
-
-// --- hand model ----------------------------------------------------------------------------------
-
-struct HandModel {
-  hawor::LoadedHandModel<double> loaded;
-  const hawor::HandModel<double>& m() const { return loaded.model; }
-};
+using namespace hawor_wasm;
 
 HandModel* newHandModel(const val& bytes, const std::string& side, const std::string& name) {
   return guard("HandModel", [&] {
@@ -178,35 +124,6 @@ HandModel* mirrored(const HandModel& h) {
     o->loaded.model = hawor::mirrorHandModel(h.m());
     return o;
   });
-}
-
-/// A pose object {rot, handPose, betas, trans} for `model`.
-hawor::HandPose<double> poseFrom(const val& p, const hawor::HandModel<double>& model, const std::string& what) {
-  if (absent(p)) throw hawor::Error(what + ": missing pose");
-  const size_t J1 = static_cast<size_t>(model.numJoints() - 1);
-  hawor::HandPose<double> pose = hawor::HandPose<double>::zero(model);
-  const std::vector<double> rot = exactly(p["rot"], 3, what + ".rot");
-  const std::vector<double> trans = exactly(p["trans"], 3, what + ".trans");
-  const std::vector<double> hp = exactly(p["handPose"], 3 * J1, what + ".handPose");
-  pose.globalOrient = hawor::Vec3<double>(rot[0], rot[1], rot[2]);
-  pose.transl = hawor::Vec3<double>(trans[0], trans[1], trans[2]);
-  std::copy(hp.begin(), hp.end(), pose.jointPose.data());  // row-major (J-1,3)
-  if (!absent(p["betas"])) {
-    const std::vector<double> b = fromTyped<double>(p["betas"]);
-    if (b.size() > static_cast<size_t>(model.numBetas())) {
-      throw hawor::Error(what + ".betas: " + std::to_string(b.size()) + " values, the model has " +
-                         std::to_string(model.numBetas()));
-    }
-    pose.betas = Eigen::Map<const hawor::VecX<double>>(b.data(), static_cast<Eigen::Index>(b.size()));
-  }
-  return pose;
-}
-
-void setPose(val& o, const hawor::HandPose<double>& p) {
-  o.set("rot", f64(p.globalOrient.data(), 3));
-  o.set("handPose", f64(p.jointPose.data(), static_cast<size_t>(p.jointPose.size())));
-  o.set("betas", f64(p.betas.data(), static_cast<size_t>(p.betas.size())));
-  o.set("trans", f64(p.transl.data(), 3));
 }
 
 val forwardHand(const HandModel& h, const val& pose) {
@@ -853,44 +770,7 @@ val metricScale(const val& in) {
     if (keyframes.empty() && hands.empty() && absent(in["points"])) {
       throw hawor::Error("give depthMaps (with keyframeDepths), hands, points, or several");
     }
-    const hawor::MetricScaleResult<double> r = hawor::estimateMetricScale(keyframes, poses, hands, opt, &mapPoints);
-    val o = val::object();
-    o.set("scale", r.fused.ok() ? r.fused.scale : std::nan(""));
-    o.set("method", r.fused.ok() ? r.fused.method : std::string("none"));
-    o.set("confidence", r.fused.confidence);
-    if (r.depthRan) {
-      o.set("keyframes", r.depth.keyframes);
-      o.set("keyframesFitted", r.depth.fitted);
-      o.set("depthScale", r.depth.scale);
-      o.set("depthConfidence", r.depthConfidence);
-    }
-    if (r.handsRan) {
-      o.set("handCue", r.hands.method);
-      o.set("handScale", r.hands.scale);
-      o.set("handConfidence", r.hands.confidence);
-    }
-    if (r.groundRan) {
-      val g = val::object();
-      g.set("ok", r.ground.ok());
-      if (r.ground.ok()) {
-        g.set("scale", r.groundUsed);  // the reading fused (floor, or the table top when ambiguous)
-        g.set("floorScale", r.ground.scale);
-        g.set("confidence", r.ground.confidence);
-        g.set("cameraHeight", r.ground.height);  // map units
-        g.set("heightSpread", r.ground.heightSpread);
-        g.set("floorPoints", r.ground.floorPoints);
-        if (std::isfinite(r.ground.floorWidth)) g.set("floorWidth", r.ground.floorWidth);  // camera heights
-        g.set("levels", r.ground.levels);
-        g.set("ambiguous", r.ground.ambiguous);
-        g.set("eyeHeight", opt.ground.eyeHeight);
-        if (std::isfinite(r.ground.surfaceHeight)) g.set("surfaceHeight", r.ground.surfaceHeight);
-        g.set("up", f64(r.ground.up.data(), 3));
-      } else {
-        g.set("reason", r.ground.reason);
-      }
-      o.set("ground", g);
-    }
-    return o;
+    return scaleToJs(hawor::estimateMetricScale(keyframes, poses, hands, opt, &mapPoints), opt.ground.eyeHeight);
   });
 }
 

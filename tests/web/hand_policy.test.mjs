@@ -1,17 +1,17 @@
-// The tracking policy beyond MediaPipe's (web/src/perception/hand_tracker.mjs, prefilter.mjs) and
-// the side assignment (web/src/pipeline/run.mjs), with stub networks whose outputs the tests
-// choose: the detector-verifier cascade (a low-score palm confirmed by the landmark network is
-// accepted, an unconfirmed one rejected, the verifications bounded), re-detection on a lost
-// track, constant-velocity search ROIs, coasting, track identity and handedness evidence, one
-// hand seen twice, the box-prefiltered detector input, and assignSides' track continuity, side
-// memory and left-to-right order. No model files, no clip.
+// The tracking policy beyond MediaPipe's (web/src/perception/hand_tracker.mjs, prefilter.mjs),
+// with stub networks whose outputs the tests choose: the detector-verifier cascade (a low-score
+// palm confirmed by the landmark network is accepted, an unconfirmed one rejected, the
+// verifications bounded), re-detection on a lost track, constant-velocity search ROIs, coasting,
+// track identity and handedness evidence, one hand seen twice and the box-prefiltered detector
+// input (the side assignment is the core's: tests/slam/test_pipeline.cpp). No model files, no
+// clip.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { HandTracker } from '../../web/src/perception/hand_tracker.mjs';
 import { cropBoxFiltered } from '../../web/src/perception/prefilter.mjs';
 import { cropImage, letterboxRoi } from '../../web/src/perception/geometry.mjs';
-import { assignSides, sideState, updateSideState, PIPELINE_TRACKER_OPTIONS } from '../../web/src/pipeline/run.mjs';
+import { PIPELINE_TRACKER_OPTIONS } from '../../web/src/pipeline/run.mjs';
 import { rng } from './support.mjs';
 
 const ort = { Tensor: class { constructor(type, data, dims) { Object.assign(this, { type, data, dims }); } } };
@@ -184,37 +184,6 @@ test('prefilter: footprint 0 is bilinear sampling, a box averages noise away, ou
   assert.throws(() => cropBoxFiltered(flat, { ...roi, rotation: 0.1 }, 4, 4), /axis-aligned/);
 });
 
-test('sides: track continuity, side memory over a short gap, two hands ordered left to right', () => {
-  const det = (x, pRight, id) => ({ handedness: pRight > 0.5 ? 'right' : 'left', handednessScore: Math.max(pRight, 1 - pRight),
-    landmarks: Float32Array.of(x, 500), ...(id ? { track: { id, pRight, frames: 5 } } : {}) });
-  const reach = 300;
-  // a track keeps its side against its own evidence while it is alone
-  let prev = sideState();
-  updateSideState(prev, { left: det(400, 0.1, 7), right: null });
-  let s = assignSides([det(420, 0.95, 7)], prev, reach);
-  assert.ok(s.left && !s.right, 'track 7 stays left');
-  // the track's evidence, not this frame's label
-  const d = { ...det(420, 0.95, 8), track: { id: 8, pRight: 0.05, frames: 9 } };
-  assert.ok(assignSides([d], sideState(), reach).left, 'pRight of the track');
-  // a side empty for a frame or two still pulls a hand that comes back where it was
-  prev = sideState();
-  updateSideState(prev, { left: det(400, 0.2), right: null });
-  updateSideState(prev, { left: null, right: null });
-  assert.equal(prev.age.left, 2);
-  s = assignSides([det(430, 0.7)], prev, reach);
-  assert.ok(s.left, 'continuity / age 2 outweighs a weak right label');
-  for (let k = 0; k < 10; ++k) updateSideState(prev, { left: null, right: null });
-  assert.ok(assignSides([det(430, 0.7)], prev, reach).right, 'long gone: the label decides');
-  // two hands whose tracks both say right: the one on the left is the left hand
-  prev = sideState();
-  s = assignSides([det(900, 0.99, 1), det(300, 0.99, 2)], prev, reach);
-  assert.equal(s.left.landmarks[0], 300);
-  // even against both tracks' continuity, when their evidence is unsure
-  updateSideState(prev, { left: det(900, 0.5, 1), right: det(300, 0.5, 2) });
-  s = assignSides([det(900, 0.5, 1), det(300, 0.5, 2)], prev, reach);
-  assert.equal(s.left.landmarks[0], 300, 'a crossing without evidence is undone');
-  // a crossing that both tracks' confident evidence supports is kept
-  s = assignSides([det(900, 0.02, 1), det(300, 0.98, 2)], prev, reach);
-  assert.equal(s.left.landmarks[0], 900, 'both hands confidently crossed');
+test('the pipeline\'s tracker policy names only options the tracker has', () => {
   assert.deepEqual(Object.keys(PIPELINE_TRACKER_OPTIONS).sort(), ['candidatePresence', 'candidateScore', 'coast', 'maxCandidates', 'motion', 'palmPrefilter', 'redetectOnLoss']);
 });

@@ -14,7 +14,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { root, clipPath, clipSkipReason, modelsSkipReason } from './mediapipe_support.mjs';
 import { rng } from './support.mjs';
-import { defaultIntrinsics, assignSides, runPipeline, slamSize, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
+import { defaultIntrinsics, toDetections, runPipeline, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from '../../web/src/pipeline/exports.mjs';
 
 const corePath = process.env.HAWOR_CORE ?? join(root, 'build/wasm/wasm/hawor_core.mjs');
@@ -74,8 +74,6 @@ test('pipeline: intrinsics from a focal or a diagonal field of view', () => {
   assert.equal(f.fx, 555); assert.equal(f.focalSource, 'user-focal');
   assert.throws(() => defaultIntrinsics(640, 480, { focalPx: -3 }), /positive number of pixels/);
   assert.throws(() => defaultIntrinsics(640, 480, { fovDeg: 180 }), /field of view/);
-  assert.deepEqual([slamSize(1920, 1080).width, slamSize(1920, 1080).height], [640, 360]);
-  assert.deepEqual([slamSize(320, 240).width, slamSize(320, 240).height], [320, 240]);
 });
 
 test('core.downscaleImage (the SLAM frames): box-filtered grey against a brute-force average, integer and fractional ratios', { skip: coreSkip() }, async () => {
@@ -147,25 +145,34 @@ test('pipeline CLI: hand models from --mano, then $HAWOR_HAND_DIR (hand_*.npz, e
   }
 });
 
-test('pipeline: left/right slots from handedness and continuity', () => {
+test('pipeline: left/right slots from handedness and continuity (the core\'s SideAssigner on the perception\'s detections)', { skip: coreSkip() }, async () => {
+  const core = await loadCore();
   const det = (hand, score, x) => ({ handedness: hand, handednessScore: score, landmarks: Float32Array.of(x, 100) });
-  const none = { left: null, right: null };
-  let s = assignSides([det('right', 0.9, 500), det('left', 0.8, 100)], none, 100);
-  assert.equal(s.right.landmarks[0], 500); assert.equal(s.left.landmarks[0], 100);
+  // frames of detections through one assigner; the last frame's [left, right] as x positions
+  const sides = (...frames) => {
+    const a = new core.SideAssigner(100);
+    try {
+      let out = null;
+      for (const f of frames) {
+        const s = a.assign(toDetections(f.map((d) => ({ ...d, landmarks: Float32Array.from({ length: 42 }, (_, i) => (i < 2 ? d.landmarks[i] : 0)) }))));
+        out = [s[0] >= 0 ? f[s[0]].landmarks[0] : null, s[1] >= 0 ? f[s[1]].landmarks[0] : null];
+      }
+      return out;
+    } finally {
+      a.delete();
+    }
+  };
+  assert.deepEqual(sides([det('right', 0.9, 500), det('left', 0.8, 100)]), [100, 500]);
   // both labelled right: the more confident keeps it, the other becomes the left hand
-  s = assignSides([det('right', 0.6, 100), det('right', 0.95, 500)], none, 100);
-  assert.equal(s.right.landmarks[0], 500); assert.equal(s.left.landmarks[0], 100);
+  assert.deepEqual(sides([det('right', 0.6, 100), det('right', 0.95, 500)]), [100, 500]);
   // an unsure label near last frame's left wrist stays left
-  s = assignSides([det('right', 0.55, 102)], { left: [100, 100], right: null }, 100);
-  assert.equal(s.left && s.left.landmarks[0], 102);
-  // both labelled right with full confidence, but each near its own track's last wrist and
-  // uncrossed: the tracks keep their sides
-  s = assignSides([det('right', 0.95, 500), det('right', 1.0, 100)], { left: [110, 100], right: [490, 100] }, 100);
-  assert.equal(s.left.landmarks[0], 100); assert.equal(s.right.landmarks[0], 500);
+  assert.deepEqual(sides([det('left', 0.99, 100)], [det('right', 0.55, 102)]), [102, null]);
+  // both labelled right with full confidence, but each near its own side's last wrist and
+  // uncrossed: they keep their sides
+  assert.deepEqual(sides([det('left', 0.99, 110), det('right', 0.99, 490)], [det('right', 0.95, 500), det('right', 1.0, 100)]), [100, 500]);
   // a lone confident label far from any track wins
-  s = assignSides([det('left', 0.99, 300)], { left: null, right: [100, 100] }, 100);
-  assert.equal(s.left && s.left.landmarks[0], 300);
-  assert.deepEqual(assignSides([], none, 100), none);
+  assert.deepEqual(sides([det('right', 0.99, 100)], [det('left', 0.99, 300)]), [300, null]);
+  assert.deepEqual(sides([]), [null, null]);
 });
 
 test('hand tracker: detectGap runs the palm detector every gap+1 frames while a hand is tracked, every frame with none', async () => {

@@ -1,5 +1,5 @@
 // eval_kitchen_hands.mjs: recall of each hand and left/right correctness of the perception +
-// side assignment (HandTracker + run.mjs's assignSides, the pipeline's defaults) on the kitchen
+// side assignment (HandTracker + the core's SideAssigner, the pipeline's defaults) on the kitchen
 // clip, against the by-eye labels in tests/data/kitchen_hands_visible.json.
 //
 //   node web/tools/eval_kitchen_hands.mjs [--video /work/shared/data/egocentric_kitchen.mp4]
@@ -18,8 +18,8 @@ import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { defaultModelsDir } from './convert_mediapipe.mjs';
 import { HandTracker } from '../src/perception/hand_tracker.mjs';
-import { probeVideo, decodeFrames } from '../cli.mjs';
-import { assignSides, sideState, updateSideState, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE, PIPELINE_TRACKER_OPTIONS } from '../src/pipeline/run.mjs';
+import { probeVideo, decodeFrames, loadCore } from '../cli.mjs';
+import { toDetections, PIPELINE_DETECT_GAP, PIPELINE_MIN_PRESENCE, PIPELINE_TRACKER_OPTIONS } from '../src/pipeline/run.mjs';
 
 const root = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const defaultVideo = '/work/shared/data/egocentric_kitchen.mp4';
@@ -39,8 +39,8 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
   ort.env.logLevel = 'error';
   const tracker = await HandTracker.create(ort, join(defaultModelsDir, `palm_detection_${model}.onnx`), join(defaultModelsDir, `hand_landmark_${model}.onnx`),
     { maxHands: 2, detectGap: PIPELINE_DETECT_GAP, minPresence: PIPELINE_MIN_PRESENCE, ...PIPELINE_TRACKER_OPTIONS, ...trackerOptions }); // runPipeline's defaults
-  const prev = sideState();
-  const reach = 0.15 * Math.hypot(width, height); // as runPipeline
+  const core = await loadCore(process.env.HAWOR_CORE ?? join(root, 'build', 'wasm', 'wasm', 'hawor_core.mjs'));
+  const assigner = new core.SideAssigner(0.15 * Math.hypot(width, height)); // the pipeline's reach
   const perFrame = [];
   let ms = 0;
   // ffmpeg's default scaling (bicubic), as the labelled figures were measured
@@ -49,15 +49,15 @@ export async function trackSides({ video = defaultVideo, maxSide = 0, model = 'l
     const t0 = performance.now();
     const dets = await tracker.track({ width, height, data, channels: 3 });
     ms += performance.now() - t0;
-    const sides = assignSides(dets, prev, reach);
-    updateSideState(prev, sides);
+    const sides = assigner.assign(toDetections(dets));
     const rec = {};
-    for (const side of ['left', 'right']) {
-      const d = sides[side];
+    ['left', 'right'].forEach((side, k) => {
+      const d = sides[k] >= 0 ? dets[sides[k]] : null;
       rec[side] = d ? [d.landmarks[0] * W / width, d.landmarks[1] * H / height] : null;
-    }
+    });
     perFrame.push(rec);
   }
+  assigner.delete();
   return { perFrame, msPerFrame: ms / Math.max(1, perFrame.length), stats: tracker.stats, width, height };
 }
 

@@ -70,6 +70,11 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
+//           handsCam?: (index) => { left: pose | null, right: pose | null }
+//                                        camera-frame hands from another regressor (HaMeR, WiLoR,
+//                                        HaWoR's network), pose objects as HandModel.forward takes
+//                                        ({rot, handPose, betas, trans}, the models' parameters);
+//                                        replaces perception and fit (`hawor world` natively)
 //           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
 //           detectGap? (1)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames
@@ -212,12 +217,6 @@ export function cameraIntrinsics(core, width, height, { focalPx, fovDeg, camera 
   return intr;
 }
 
-/** The SLAM's frame size: the long side at most maxSide, aspect kept, integer pixels. */
-export function slamSize(width, height, maxSide = 640) {
-  const s = Math.min(1, maxSide / Math.max(width, height));
-  return { width: Math.max(16, Math.round(width * s)), height: Math.max(16, Math.round(height * s)), s };
-}
-
 /** P(right) of a detection: its track's (the tracker's handedness evidence summed over the
  *  frames of the track), else from its label and score. */
 function pRight(h) {
@@ -226,114 +225,15 @@ function pRight(h) {
   return h.handedness === 'right' ? s : 1 - s;
 }
 
-/**
- * Left/right slots for this frame's detections (at most one per side): the assignment of least
- * cost, where a detection's cost on a side is
- *   -log P(side) from the landmark network's handedness (of the detection's track when the
- *     tracker gives one), clamped to [0.05, 0.95] (one frame's label, which flips now and then
- *     with full confidence, can be outvoted), minus
- *   CONTINUITY when it continues the track that side last held (prev.tracks, tracker ids kept
- *     over frames without that side), else CONTINUITY * (1 - d / reach) / age when it lies
- *     within `reach` px of that side's last wrist, seen `age` frames ago (1: the previous
- *     frame; tracks keep their side, and a hand lost for a few frames mostly comes back where
- *     it was),
- * plus, for two hands, CROSSED when the left slot's wrist lies right of the right slot's (hands
- * rarely cross in an egocentric view: CROSSED exceeds both tracks' continuity, so two hands in
- * view are ordered left to right unless both hands' handedness evidence holds the crossing; a
- * track whose first frames' labels were wrong, as the network's often are on a hand entering
- * at the bottom edge, changes side as soon as the other hand is in view).
- * prev: { left: [x, y] | null, right: [x, y] | null, age?: { left, right } (default 1),
- *         tracks?: { left: id | null, right: id | null } } (sideState / updateSideState);
- * reach: pixels.
- */
-export function assignSides(dets, prev, reach) {
-  const CONTINUITY = 3.5;
-  const CROSSED = 2 * CONTINUITY + 2;
-  const cost = (d, side) => {
-    const p = Math.min(Math.max(side === 'right' ? pRight(d) : 1 - pRight(d), 0.05), 0.95);
-    let c = -Math.log(p);
-    const w = prev[side];
-    if (d.track && prev.tracks && prev.tracks[side] === d.track.id) c -= CONTINUITY;
-    else if (w) {
-      const dist = Math.hypot(d.landmarks[0] - w[0], d.landmarks[1] - w[1]);
-      const age = prev.age ? Math.max(1, prev.age[side]) : 1;
-      if (dist < reach) c -= (CONTINUITY * (1 - dist / reach)) / age;
-    }
-    return c;
-  };
-  if (dets.length === 0) return { left: null, right: null };
-  if (dets.length === 1) {
-    const d = dets[0];
-    return cost(d, 'left') < cost(d, 'right') ? { left: d, right: null } : { left: null, right: d };
-  }
-  // the best two (the tracker returns at most maxHands)
-  const [a, b] = dets;
-  const crossed = (l, r) => (l.landmarks[0] > r.landmarks[0] ? CROSSED : 0);
-  const ab = cost(a, 'left') + cost(b, 'right') + crossed(a, b);
-  const ba = cost(b, 'left') + cost(a, 'right') + crossed(b, a);
-  return ab <= ba ? { left: a, right: b } : { left: b, right: a };
-}
-
-/** The state assignSides reads: no side seen yet. */
-export function sideState() {
-  return { left: null, right: null, age: { left: 0, right: 0 }, tracks: { left: null, right: null } };
-}
-
-/** After a frame's assignment: each filled side's wrist, age 1 and track (a track holds one side
- *  at a time); an empty side keeps its last wrist and track, one frame older. */
-export function updateSideState(prev, sides) {
-  for (const side of ['left', 'right']) {
-    const d = sides[side];
-    if (!d) {
-      if (prev[side]) prev.age[side] += 1;
-      continue;
-    }
-    const other = side === 'left' ? 'right' : 'left';
-    prev[side] = [d.landmarks[0], d.landmarks[1]];
-    prev.age[side] = 1;
-    prev.tracks[side] = d.track ? d.track.id : null;
-    if (d.track && prev.tracks[other] === d.track.id) prev.tracks[other] = null;
-  }
-}
-
-function nanArray(n) {
-  const a = new Float64Array(n);
-  a.fill(NaN);
-  return a;
-}
-
-/** A growable per-frame store of one hand's camera-frame observations. */
-class HandTrackStore {
-  constructor(P, B) {
-    Object.assign(this, { P, B });
-    this.frames = [];
-  }
-  push(f) { this.frames.push(f); }
-  column(get, width) {
-    const T = this.frames.length;
-    const a = nanArray(T * width);
-    for (let t = 0; t < T; ++t) {
-      const v = this.frames[t] && get(this.frames[t]);
-      if (v) a.set(v.length > width ? v.subarray(0, width) : v, t * width);
-    }
-    return a;
-  }
-}
-
-/** Centred moving average (half-width k) of a (T,3) track within each run of valid frames. */
-function smoothTrack(positions, valid, T, k) {
-  const src = Float64Array.from(positions);
-  for (let t = 0; t < T; ++t) {
-    if (!valid[t]) continue;
-    let lo = t; while (lo > t - k && lo > 0 && valid[lo - 1]) lo -= 1;
-    let hi = t; while (hi < t + k && hi < T - 1 && valid[hi + 1]) hi += 1;
-    const h = Math.min(t - lo, hi - t); // symmetric window (no lag)
-    for (let a = 0; a < 3; ++a) {
-      let sum = 0;
-      for (let u = t - h; u <= t + h; ++u) sum += src[3 * u + a];
-      positions[3 * t + a] = sum / (2 * h + 1);
-    }
-  }
+/** The perception's detections ({landmarks (2 or 3 per keypoint), world, handedness,
+ *  handednessScore, track}) as the core's Pipeline and SideAssigner take them. */
+export function toDetections(dets) {
+  return dets.map((d) => {
+    const stride = d.landmarks.length === 63 ? 3 : 2;
+    const kp2 = new Float64Array(2 * NUM_KP);
+    for (let k = 0; k < NUM_KP; ++k) { kp2[2 * k] = d.landmarks[stride * k]; kp2[2 * k + 1] = d.landmarks[stride * k + 1]; }
+    return { keypoints2d: kp2, keypoints3d: d.world ? Float64Array.from(d.world) : null, pRight: pRight(d), track: d.track ? d.track.id : -1 };
+  });
 }
 
 function modelName(bytes, given, side) {
@@ -379,17 +279,9 @@ export async function runPipeline(source, options, hooks = {}) {
   // The camera model (the core parses and checks the lens; a pinhole lens changes nothing below).
   const intr = cameraIntrinsics(core, width, height, options);
   const lens = intr.lens;
-  const withLens = lens !== 'pinhole';
   const K = [intr.fx, intr.fy, intr.cx, intr.cy];
-  const ss = slamSize(width, height, options.slamMaxSide ?? 640);
-  const sx = ss.width / width;
-  const sy = ss.height / height;
-  // The SLAM image's pixel (u', v') covers source pixels u = (u' + 0.5) / s - 0.5.
-  const Ks = [intr.fx * sx, intr.fy * sy, (intr.cx + 0.5) * sx - 0.5, (intr.cy + 0.5) * sy - 0.5];
-  const dilate = options.maskDilatePx ?? 2; // pixels at the SLAM resolution (see README: 8 px was no better)
-  const infillMethod = options.infill ?? 'spline';
 
-  const owned = []; // embind objects to delete
+  const owned = []; // embind objects to delete (in reverse: the pipeline before its models)
   let tracker = null;
   let depthModel = null;
   try {
@@ -407,40 +299,20 @@ export async function runPipeline(source, options, hooks = {}) {
       owned.push(models[side]);
       if (models[side].numKeypoints() !== NUM_KP) throw new Error(`the ${side} hand model gives ${models[side].numKeypoints()} keypoints, not 21`);
     }
-    const fitters = { left: new core.HandFitter(models.left), right: new core.HandFitter(models.right) };
-    owned.push(fitters.left, fitters.right);
-    // With a lens: perspective landmark crops through it (full resolution), and the SLAM frames
-    // rectified to the virtual pinhole camera (SLAM resolution).
-    let lensCamera = null;
-    let rectifier = null;
-    if (withLens) {
-      lensCamera = new core.LensCamera(K, width, height, lens);
+    let lensCrops = null;
+    if (lens !== 'pinhole') {
+      // perspective landmark crops through the lens (full resolution)
+      const lensCamera = new core.LensCamera(K, width, height, lens);
       owned.push(lensCamera);
-      rectifier = new core.Rectifier(Ks, ss.width, ss.height, lens);
-      owned.push(rectifier);
+      lensCrops = { cropMap: (roi, n) => lensCamera.cropMap(roi, n, n), cropToImage: (roi, uv) => lensCamera.cropToImage(roi, uv) };
       if (intr.focalSource !== 'user-focal') {
         warnings.push(`a lens model (${lens}) without a focal length: the focal comes from a ${options.fovDeg ?? DEFAULT_DIAGONAL_FOV_DEG} degree field of view through the lens; calibrated coefficients belong with their calibration's focal (give it)`);
       }
     }
-    /** Keypoints for the fit: through the lens, undistorted to the virtual pinhole camera of K
-     *  (those beyond the lens' reach get confidence 0). */
-    const fitInput = (kp2, Kfit) => {
-      if (!withLens) return { kp: kp2, conf: null };
-      const u = core.undistortPoints(Kfit, lens, kp2);
-      const conf = new Float64Array(NUM_KP);
-      for (let k = 0; k < NUM_KP; ++k) {
-        if (Number.isFinite(u[2 * k]) && Number.isFinite(u[2 * k + 1])) conf[k] = 1;
-        else { u[2 * k] = 0; u[2 * k + 1] = 0; }
-      }
-      return { kp: u, conf };
-    };
-    const lensCrops = lensCamera ? { cropMap: (roi, n) => lensCamera.cropMap(roi, n, n), cropToImage: (roi, uv) => lensCamera.cropToImage(roi, uv) } : null;
-    const P = { left: 3 * (models.left.numJoints() - 1), right: 3 * (models.right.numJoints() - 1) };
-    const B = { left: models.left.numBetas(), right: models.right.numBetas() };
     if (options.threads && options.ort && options.ort.env && options.ort.env.wasm && !options.models?.palmSession) {
       options.ort.env.wasm.numThreads = options.threads; // effective before onnxruntime's first session only
     }
-    if (!options.observations) {
+    if (!options.observations && !options.handsCam) {
       const ort = options.ort;
       if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
       const m = options.models ?? {};
@@ -465,20 +337,26 @@ export async function runPipeline(source, options, hooks = {}) {
     }
     addTime('load', now() - t0);
 
+    // The method's policy lives in the core's Pipeline (include/hawor/pipeline/pipeline.hpp).
     const refineFocal = options.refineFocal ?? true;
-    const focalPriorSigma = options.focalPriorSigma ?? (intr.focalSource === 'user-focal' ? 0.1 : 0.3);
-    const slam = new core.MonoSlam(Ks, ss.width, ss.height, { useMasks: true, refineFocal, focalPriorSigma, rollingShutter: readout * fps });
-    const rerunBytes = options.focalRerunBytes ?? 256 * 1024 * 1024;
-    let keptSlam = refineFocal && rerunBytes > 0 ? { frames: [], masks: [], bytes: 0 } : null;
-    owned.push(slam);
-    const stores = { left: new HandTrackStore(P.left, B.left), right: new HandTrackStore(P.right, B.right) };
-    const keptRgb = depthModel ? [] : null; // frames (and hand masks) for the depth of the keyframes
-    const keptMasks = depthModel ? [] : null;
-    const prevWrist = sideState();
-    const reach = 0.15 * Math.hypot(width, height);
+    const pipeline = new core.Pipeline({
+      intrinsics: K, width, height, lens, fps, readout, refineFocal, userFocal: intr.focalSource === 'user-focal',
+      ...(options.focalPriorSigma !== undefined ? { focalPriorSigma: options.focalPriorSigma } : {}),
+      ...(options.slamMaxSide !== undefined ? { slamMaxSide: options.slamMaxSide } : {}),
+      ...(options.maskDilatePx !== undefined ? { maskDilatePx: options.maskDilatePx } : {}),
+      ...(options.focalMaxPasses !== undefined ? { focalMaxPasses: options.focalMaxPasses } : {}),
+      ...(options.focalRerunBytes !== undefined ? { focalRerunBytes: options.focalRerunBytes } : {}),
+      ...(options.handScaleSmooth !== undefined ? { handScaleSmooth: options.handScaleSmooth } : {}),
+      ...(options.eyeHeight !== undefined ? { eyeHeight: options.eyeHeight } : {}),
+      infill: options.infill ?? 'spline', groundScale: options.groundScale ?? true, depthMasks: !!depthModel,
+    }, models.left, models.right);
+    owned.push(pipeline);
+    const ss = pipeline.slamSize();
+    // frames for the depth of the keyframes, at the SLAM's size (rectified through a lens)
+    const keptRgb = depthModel ? [] : null;
+    const rectifier = depthModel && lens !== 'pinhole' ? new core.Rectifier(ss.intrinsics, ss.width, ss.height, lens) : null;
+    if (rectifier) owned.push(rectifier);
     let T = 0;
-    let channels = 0;
-    let fitFailures = 0;
 
     for await (const frame of source.frames) {
       checkAbort(signal);
@@ -487,197 +365,48 @@ export async function runPipeline(source, options, hooks = {}) {
       if (!(rgba instanceof Uint8Array || rgba instanceof Uint8ClampedArray)) throw new Error(`frame ${T}: rgba must be a Uint8Array`);
       const c = rgba.length / (width * height);
       if (c !== 3 && c !== 4) throw new Error(`frame ${T}: ${rgba.length} bytes, expected ${width}x${height}x4 (RGBA) or x3 (RGB)`);
-      channels = c;
-      // --- perception ---
-      let t1 = now();
-      let dets;
-      if (options.observations) {
-        dets = (await options.observations(T)) ?? [];
-      } else {
-        dets = await tracker.track({ width, height, data: rgba, channels: c });
-      }
-      addTime('perception', now() - t1);
-      const sides = assignSides(dets, prevWrist, reach);
-      updateSideState(prevWrist, sides);
-      // --- fit ---
-      t1 = now();
-      const maskHands = [];
-      const info = { index: frame.index ?? T, hands: [] };
-      for (const side of ['left', 'right']) {
-        const d = sides[side];
-        if (!d) {
-          fitters[side].reset();
-          stores[side].push(null);
-          continue;
-        }
-        const stride = d.landmarks.length === 63 ? 3 : 2;
-        const kp2 = new Float64Array(2 * NUM_KP);
-        for (let k = 0; k < NUM_KP; ++k) { kp2[2 * k] = d.landmarks[stride * k]; kp2[2 * k + 1] = d.landmarks[stride * k + 1]; }
-        const kp3 = d.world ? Float64Array.from(d.world) : null;
-        let fit = null;
-        try {
-          const fi = fitInput(kp2, K);
-          fit = fitters[side].fit(fi.kp, fi.conf, kp3, null, K, width, height);
-        } catch (e) {
-          fitFailures += 1;
-          fitters[side].reset();
-        }
-        // a fit behind the camera or absurdly far is not a hand
-        const ok = fit && fit.trans[2] > 0.03 && fit.trans[2] < 5 && Number.isFinite(fit.reprojRmsPx);
-        if (!ok) {
-          stores[side].push({ kp2, kp3 });
-          info.hands.push({ side, valid: false, keypoints2d: kp2 });
-          continue;
-        }
-        stores[side].push({ kp2, kp3, fit });
-        maskHands.push({ model: models[side], rot: fit.rot, handPose: fit.handPose, betas: fit.betas, trans: fit.trans, value: 255 });
-        info.hands.push({ side, valid: true, keypoints2d: kp2 });
-      }
-      addTime('fit', now() - t1);
-      // --- masks at the SLAM resolution ---
-      t1 = now();
-      const mask = maskHands.length ? core.renderHandMasks(ss.width, ss.height, Ks, maskHands, dilate) : null;
-      if (keptMasks) keptMasks.push(mask);
-      addTime('masks', now() - t1);
-      // --- SLAM ---
-      t1 = now();
-      // at the frame's own size the core converts to grey itself; with a lens the grey frame is
-      // rectified to the virtual pinhole camera, and the part of it the lens does not see joins
-      // the mask
-      let slamFrame = ss.width === width && ss.height === height && !rectifier ? rgba : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true);
-      let slamMask = mask;
-      if (rectifier) {
-        slamFrame = rectifier.grey(slamFrame);
-        slamMask = rectifier.slamMask(mask);
-      }
       if (keptRgb) {
         const rgb = ss.width === width && ss.height === height && c === 3 ? rgba.slice() : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, false);
         keptRgb.push(rectifier ? rectifier.image(rgb, 3) : rgb);
       }
-      if (keptSlam) {
-        if (keptSlam.bytes + 2 * ss.width * ss.height > rerunBytes) {
-          keptSlam = null; // too long a video for a second SLAM pass: the focal is refined in the final BA only
-        } else {
-          const g = slamFrame === rgba ? core.downscaleImage(rgba, width, height, c, ss.width, ss.height, true) : slamFrame;
-          keptSlam.frames.push(g);
-          keptSlam.masks.push(slamMask);
-          keptSlam.bytes += g.length + (slamMask ? slamMask.length : 0);
-        }
+      const info = { index: frame.index ?? T, hands: [] };
+      if (options.handsCam) {
+        // camera-frame hands from another regressor: masks, SLAM (no perception, no fit)
+        const given = (await options.handsCam(T)) ?? {};
+        const r = pipeline.pushHands(rgba, { left: given.left ?? null, right: given.right ?? null });
+        info.slamStatus = r.slamStatus;
+        ['left', 'right'].forEach((side, s) => { if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s] }); });
+      } else {
+        // --- perception ---
+        const t1 = now();
+        const dets = options.observations ? ((await options.observations(T)) ?? []) : await tracker.track({ width, height, data: rgba, channels: c });
+        addTime('perception', now() - t1);
+        // --- sides, fit, masks, SLAM ---
+        const input = toDetections(dets);
+        const r = pipeline.push(rgba, input);
+        info.slamStatus = r.slamStatus;
+        ['left', 'right'].forEach((side, s) => {
+          if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s], keypoints2d: input[r.detection[s]].keypoints2d });
+        });
       }
-      addTime('slamPrep', now() - t1);
-      t1 = now();
-      info.slamStatus = slam.process(slamFrame, slamMask);
-      addTime('slam', now() - t1);
       T += 1;
       info.ms = now() - tf;
       if (onFrame) onFrame(info);
       if (onProgress) onProgress({ stage: 'frames', done: T, total: source.frameCount ?? null });
     }
     if (T === 0) throw new Error('the video has no frames');
-    if (fitFailures) warnings.push(`the hand fit failed on ${fitFailures} detections (those frames count as unobserved)`);
     checkAbort(signal);
 
-    // --- SLAM finish ---
-    let t1 = now();
+    // --- the SLAM's finish, its passes with a refined focal, the hands fitted again ---
     if (onProgress) onProgress({ stage: 'slam-finish', done: 0, total: 1 });
-    let traj = slam.finish();
-    addTime('slamFinish', now() - t1);
-    const fr1 = traj.focal;
-    let focalPasses = 1;
-    const maxPasses = options.focalMaxPasses ?? 4;
-    // Further passes with the refined focal while it still moves: a map built with a wrong focal
-    // (its triangulations and culled observations) biases each pass's estimate toward its start.
-    let last = fr1;
-    t1 = now();
-    while (last && last.changed && keptSlam && keptSlam.frames.length === T && focalPasses < maxPasses) {
-      checkAbort(signal);
-      const slam2 = new core.MonoSlam([last.fx, last.fy, Ks[2], Ks[3]], ss.width, ss.height, { useMasks: true, refineFocal: true, focalPriorSigma, focalPriorFx: Ks[0], rollingShutter: readout * fps });
-      owned.push(slam2);
-      for (let t = 0; t < T; ++t) slam2.process(keptSlam.frames[t], keptSlam.masks[t]);
-      const traj2 = slam2.finish();
-      if (!traj2.initialised && traj.initialised) break; // keep the previous pass
-      traj = traj2;
-      focalPasses += 1;
-      last = traj2.focal;
-    }
-    if (focalPasses > 1) {
-      addTime('slamRerun', now() - t1);
-      const f = traj.focal;
-      // the output's focal is the last pass's; refined relative to the user's guess
-      traj.focal = { ...f, changed: true, accepted: true, stdLog: f.accepted ? f.stdLog : fr1.stdLog,
-        estimateFx: f.estimateFx > 0 ? f.estimateFx : f.fx, reason: `${fr1.reason} (${focalPasses} SLAM passes)` };
-    }
-    keptSlam = null;
-    if (!traj.initialised) {
-      warnings.push(T < 2 ? 'a single frame: no camera motion can be estimated (identity pose)'
-        : 'the SLAM did not initialise (too little camera translation or texture): the camera is held at the first pose');
-    }
-    // --- focal: the SLAM's refinement (the hands are re-fitted with it) ---
-    const fr = traj.focal;
-    const intrOut = { ...intr, guessSource: intr.focalSource, guessFx: intr.fx, refined: false, focalPasses,
-      focalStd: fr && fr.accepted && Number.isFinite(fr.stdLog) ? fr.stdLog : null,
-      focalEstimateFx: fr && fr.estimateFx > 0 ? fr.estimateFx / sx : null,
-      focalReason: !refineFocal ? 'off' : (fr ? fr.reason : 'not run'), readout };
-    if (fr && fr.changed) {
-      intrOut.fx = fr.fx / sx;
-      intrOut.fy = fr.fy / sy;
-      intrOut.refined = true;
-      intrOut.focalSource = 'slam';
-      intrOut.fovDeg = withLens ? 2 * core.describeCamera([intrOut.fx, intrOut.fy, intr.cx, intr.cy], width, height, lens).maxFieldAngleDeg
-        : (2 * Math.atan(0.5 * Math.hypot(width, height) / intrOut.fx) * 180) / Math.PI;
-      t1 = now();
-      const K2 = [intrOut.fx, intrOut.fy, intr.cx, intr.cy];
-      for (const side of ['left', 'right']) {
-        fitters[side].reset();
-        let prevOk = false;
-        for (const f of stores[side].frames) {
-          if (!f) { if (prevOk) fitters[side].reset(); prevOk = false; continue; }
-          let fit = null;
-          try {
-            // through a lens: the lens' fx, fy scale with the refined virtual focal
-            const fi = fitInput(f.kp2, K2);
-            fit = fitters[side].fit(fi.kp, fi.conf, f.kp3, null, K2, width, height);
-          } catch (e) {
-            fitters[side].reset();
-          }
-          const ok = fit && fit.trans[2] > 0.03 && fit.trans[2] < 5 && Number.isFinite(fit.reprojRmsPx);
-          if (ok) f.fit = fit; else { delete f.fit; fitters[side].reset(); }
-          prevOk = !!ok;
-        }
-      }
-      addTime('refit', now() - t1);
-    }
-    const nLost = Array.from(traj.status).filter((s) => s === 2).length;
-    if (nLost > 0) warnings.push(`the camera was lost on ${nLost} of ${T} frames (their poses are interpolated or held)`);
+    const cam = pipeline.finishCamera();
     checkAbort(signal);
-
-    // --- hands: camera-frame motion per side ---
-    const hands = {};
-    const present = {};
-    for (const side of ['left', 'right']) {
-      const st = stores[side];
-      const valid = new Uint8Array(T);
-      for (let t = 0; t < T; ++t) valid[t] = st.frames[t] && st.frames[t].fit ? 1 : 0;
-      present[side] = valid.some((v) => v);
-      hands[side] = {
-        valid,
-        camRot: st.column((f) => f.fit && f.fit.rot, 3),
-        camTrans: st.column((f) => f.fit && f.fit.trans, 3),
-        handPose: st.column((f) => f.fit && f.fit.handPose, P[side]),
-        betas: st.column((f) => f.fit && f.fit.betas, B[side]),
-        jointsCam: st.column((f) => f.fit && f.fit.keypoints, 3 * NUM_KP),
-        keypoints2d: st.column((f) => f.kp2, 2 * NUM_KP),
-        reprojRmsPx: st.column((f) => f.fit && Float64Array.of(f.fit.reprojRmsPx), 1),
-      };
-    }
-    const noHands = !present.left && !present.right;
-    if (noHands) warnings.push('no hands were found in the video');
 
     // --- depth on keyframes (optional) ---
     let depthMaps = null;
     if (depthModel) {
-      t1 = now();
-      const frames = Array.from(traj.keyframeDepths.frames);
+      const t1 = now();
+      const frames = Array.from(cam.keyframeFrames);
       depthMaps = [];
       for (let k = 0; k < frames.length; ++k) {
         checkAbort(signal);
@@ -688,122 +417,42 @@ export async function runPipeline(source, options, hooks = {}) {
         depthMaps.push(map);
         if (onProgress) onProgress({ stage: 'depth', done: k + 1, total: frames.length });
       }
-      keptRgb.length = 0; // the masks are still needed by the scale
+      keptRgb.length = 0;
       addTime('depth', now() - t1);
     }
 
-    // --- metric scale ---
-    t1 = now();
+    // --- metric scale, camera and hands in the world, infilling ---
     if (onProgress) onProgress({ stage: 'scale', done: 0, total: 1 });
-    const handScaleSmooth = options.handScaleSmooth ?? 0;
-    const wristTracks = [];
-    for (const side of ['left', 'right']) {
-      if (!present[side]) continue;
-      const positions = new Float64Array(3 * T);
-      const jc = hands[side].jointsCam;
-      for (let t = 0; t < T; ++t) positions.set(hands[side].valid[t] ? jc.subarray(63 * t, 63 * t + 3) : [0, 0, 1], 3 * t);
-      if (handScaleSmooth > 0) smoothTrack(positions, hands[side].valid, T, handScaleSmooth);
-      wristTracks.push({ positions, valid: hands[side].valid });
+    const r = pipeline.finish(depthMaps);
+    for (const [k, ms] of Object.entries(r.timings)) addTime(k, ms);
+    const fi = r.intrinsics;
+    const intrOut = { ...intr, guessSource: intr.focalSource, guessFx: intr.fx, refined: false, focalPasses: fi.focalPasses,
+      focalStd: fi.focalStd, focalEstimateFx: fi.focalEstimateFx, focalReason: fi.focalReason, readout };
+    if (fi.refined) {
+      intrOut.fx = fi.fx;
+      intrOut.fy = fi.fy;
+      intrOut.refined = true;
+      intrOut.focalSource = 'slam';
+      intrOut.fovDeg = lens !== 'pinhole' ? 2 * core.describeCamera([fi.fx, fi.fy, intr.cx, intr.cy], width, height, lens).maxFieldAngleDeg
+        : (2 * Math.atan(0.5 * Math.hypot(width, height) / fi.fx) * 180) / Math.PI;
     }
-    let scale = { scale: NaN, method: 'none', confidence: 0 };
-    const groundCue = options.groundScale ?? true;
-    const havePoints = groundCue && traj.points.length >= 3;
-    if (traj.initialised && (wristTracks.length || depthMaps || havePoints)) {
-      try {
-        const masksKf = depthMaps ? Array.from(traj.keyframeDepths.frames, (f) => keptMasks[f] ?? null) : undefined;
-        scale = core.metricScale({
-          rotations: traj.rotations, translations: traj.translations, fps,
-          ...(depthMaps ? { keyframeDepths: traj.keyframeDepths, depthMaps, depthWidth: ss.width, depthHeight: ss.height, masks: masksKf } : {}),
-          ...(wristTracks.length ? { hands: wristTracks } : {}),
-          ...(havePoints ? { points: traj.points, ...(options.eyeHeight ? { eyeHeight: options.eyeHeight } : {}) } : {}),
-        });
-      } catch (e) {
-        warnings.push(`metric scale: ${e.message}`);
-      }
-    }
-    let s = scale.scale;
-    if (!(Number.isFinite(s) && s > 0)) {
-      // No metric cue: keep the SLAM's own units, flagged (the trajectory's shape is still right).
-      s = 1;
-      if (traj.initialised) warnings.push('no metric scale could be estimated (no depth model, no usable hand cue, no floor in the map): the camera trajectory is in the SLAM\'s arbitrary units');
-      scale = { ...scale, scale: 1, method: 'none', confidence: 0 };
-    } else if (scale.confidence < 0.4) {
-      warnings.push(`the metric scale is uncertain (method ${scale.method}, confidence ${scale.confidence.toFixed(2)})`);
-    }
-    addTime('scale', now() - t1);
-    checkAbort(signal);
-
-    // --- camera in metres ---
-    const positions = new Float64Array(3 * T);
-    const quaternions = core.rotationsToQuaternions(traj.rotations);
-    const timestamps = new Float64Array(T);
-    for (let t = 0; t < T; ++t) {
-      for (let a = 0; a < 3; ++a) positions[3 * t + a] = s * traj.translations[3 * t + a];
-      timestamps[t] = t / fps;
-    }
-    // SLAM points: the final map, in metres
-    const points = traj.points.map((v) => s * v);
-
-    // --- world motion, infilling, joints ---
-    const outHands = {};
-    for (const side of ['left', 'right']) {
-      const h = hands[side];
-      const base = {
-        valid: h.valid, present: present[side], camRot: h.camRot, camTrans: h.camTrans, jointsCam: h.jointsCam,
-        keypoints2d: h.keypoints2d, reprojRmsPx: h.reprojRmsPx, handPoseCols: P[side], betaCols: B[side],
-        model: models[side].kind(),
-      };
-      if (!present[side]) {
-        outHands[side] = { ...base, infilled: new Uint8Array(T), trans: nanArray(3 * T), rot: nanArray(3 * T),
-          handPose: nanArray(P[side] * T), betas: nanArray(B[side] * T), jointsWorld: nanArray(63 * T) };
-        continue;
-      }
-      t1 = now();
-      const camMotion = { rot: h.camRot, trans: h.camTrans, handPose: h.handPose, betas: h.betas, valid: h.valid };
-      // cameraToWorld wants finite numbers everywhere: unobserved frames get zeros (they are
-      // overwritten by the infiller)
-      const finite = (a) => a.map((v) => (Number.isFinite(v) ? v : 0));
-      const world = core.cameraToWorld({ rot: finite(camMotion.rot), trans: finite(camMotion.trans), handPose: finite(camMotion.handPose),
-        betas: finite(camMotion.betas), valid: camMotion.valid }, T, traj.rotations, traj.translations, s, models[side]);
-      addTime('world', now() - t1);
-      t1 = now();
-      for (const k of ['rot', 'trans', 'handPose', 'betas']) {
-        const cols = world[k].length / T;
-        for (let t = 0; t < T; ++t) if (!h.valid[t]) world[k].fill(NaN, t * cols, (t + 1) * cols);
-      }
-      const filled = core.infillHand(world, T, infillMethod, models[side]);
-      addTime('infill', now() - t1);
-      t1 = now();
-      const jointsWorld = new Float64Array(63 * T);
-      for (let t = 0; t < T; ++t) {
-        const pose = {
-          rot: filled.rot.subarray(3 * t, 3 * t + 3), trans: filled.trans.subarray(3 * t, 3 * t + 3),
-          handPose: filled.handPose.subarray(P[side] * t, P[side] * (t + 1)), betas: filled.betas.subarray(B[side] * t, B[side] * (t + 1)),
-        };
-        jointsWorld.set(models[side].forward(pose).keypoints, 63 * t);
-      }
-      addTime('joints', now() - t1);
-      outHands[side] = { ...base, infilled: filled.filled, trans: filled.trans, rot: filled.rot, handPose: filled.handPose,
-        betas: filled.betas, jointsWorld };
-    }
+    for (const side of ['left', 'right']) r.hands[side].model = models[side].kind();
     if (onProgress) onProgress({ stage: 'done', done: 1, total: 1 });
 
     return {
       version: RESULT_VERSION,
-      width, height, fps, frameCount: T, modelKind: options.observations ? 'observations' : (options.modelKind ?? 'lite'),
+      width, height, fps, frameCount: T, modelKind: options.handsCam ? 'camera-frame hands' : options.observations ? 'observations' : (options.modelKind ?? 'lite'),
       threads: options.threads ?? 1,
       intrinsics: intrOut,
-      slam: { width: ss.width, height: ss.height, numKeyframes: traj.numKeyframes, numLosses: traj.numLosses,
-        numResets: traj.numResets, numRelocalisations: traj.numRelocalisations, numPlaceRelocalisations: traj.numPlaceRelocalisations, numRevisitPoints: traj.numRevisitPoints,
-        numPlaceLinks: traj.numPlaceLinks, numPlacedSegments: traj.numPlacedSegments, numRefinedFrames: traj.numRefinedFrames, numHeadModelFrames: traj.numHeadModelFrames, initialised: traj.initialised },
-      camera: { positions, quaternions, status: traj.status, timestamps },
-      points,
-      scale,
-      hands: outHands,
+      slam: r.slam,
+      camera: r.camera,
+      points: r.points,
+      scale: r.scale,
+      hands: r.hands,
       faces: { left: models.left.faces(), right: models.right.faces() },
       timings,
-      warnings,
-      noHands,
+      warnings: [...warnings, ...r.warnings],
+      noHands: r.noHands,
       stats: tracker ? { ...tracker.stats } : {},
     };
   } finally {
