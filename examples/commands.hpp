@@ -10,5 +10,6 @@ int cmdFit(int argc, char** argv);   // hawor fit --model M --obs K.npz --intrin
 int cmdSynth(int argc, char** argv);  // hawor synth --preset P --seed N --out DIR | --list
 int cmdSlam(int argc, char** argv);   // hawor slam --images DIR --intrinsics ... --out TRAJ.tum
 int cmdScale(int argc, char** argv);  // hawor scale --traj T.tum --keyframe-depths KD.npz ... --out M.tum
-int cmdInfill(int argc, char** argv);  // hawor infill --in HANDS.npz --out FILLED.npz [--method ...]
+int cmdInfill(int argc, char** argv);
+int cmdWorld(int argc, char** argv);  // hawor world --images DIR --hands H.npz --out DIR ...  // hawor infill --in HANDS.npz --out FILLED.npz [--method ...]
 }  // namespace hawor_cli

@@ -35,6 +35,8 @@ const char* kUsage =
     "        [--metric-depth DIR] [--hands H.npz] --out M.tum  depth maps and/or the hands\n"
     "  infill --in HANDS.npz --out FILLED.npz        fill the frames where a hand was unseen\n"
     "         [--method last|lerp|spline|transformer] [--weights W.npz] [--smooth]\n"
+    "  world --images DIR --hands HANDS.npz --out DIR  camera-frame hands from any regressor to\n"
+    "        [--intrinsics ..|--fov DEG] [--mano DIR]  a metric world: masks, SLAM, scale, infill\n"
     "\n"
     "Run 'hawor <command> --help' for a command's options.\n";
 
@@ -56,6 +58,7 @@ int main(int argc, char** argv) {
     if (cmd == "slam") return hawor_cli::cmdSlam(argc, argv);
     if (cmd == "scale") return hawor_cli::cmdScale(argc, argv);
     if (cmd == "infill") return hawor_cli::cmdInfill(argc, argv);
+    if (cmd == "world") return hawor_cli::cmdWorld(argc, argv);
     std::fprintf(stderr, "hawor: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
     return 2;
   } catch (const hawor_cli::UsageError& e) {
