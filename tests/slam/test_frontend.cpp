@@ -112,7 +112,7 @@ TEST_CASE("hand mask: dilation equals a brute-force square max; coarse mask cove
   for (int r : {1, 3, 6}) {
     ImageU8 d = bin;
     std::vector<unsigned char> tmp;
-    hawor::dilateMask(d, r, tmp);
+    hawor::dilateSquare(d, r, tmp);
     int mismatches = 0;
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {

@@ -37,8 +37,9 @@ inline void binaryHandMask(const ImageU8& mask, int width, int height, ImageU8& 
   }
 }
 
-/// Dilates a binary mask in place by r pixels (a (2r+1)² square), O(1) per pixel and pass.
-inline void dilateMask(ImageU8& m, int r, std::vector<unsigned char>& tmp) {
+/// Dilates a binary mask in place by r pixels (a (2r+1)² square, the SLAM's margin), O(1) per
+/// pixel and pass; render/mask.hpp's dilateMask grows by a disc (the rendered hand masks).
+inline void dilateSquare(ImageU8& m, int r, std::vector<unsigned char>& tmp) {
   if (r <= 0 || m.empty()) return;
   const int w = m.width, h = m.height;
   tmp.resize(m.data.size());

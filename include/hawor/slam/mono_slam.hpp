@@ -249,7 +249,7 @@ class MonoSlam {
     hasMask_ = false;
     if (mask && opt_.useMasks) {
       binaryHandMask(*mask, width_, height_, curMask_);
-      dilateMask(curMask_, opt_.maskDilatePx, maskTmp_);
+      dilateSquare(curMask_, opt_.maskDilatePx, maskTmp_);
       hasMask_ = true;
     } else if (mask) {
       binaryHandMask(*mask, width_, height_, curMask_);  // size check only

@@ -140,7 +140,7 @@ struct TwoViewResult {
 namespace two_view_detail {
 
 template <typename Scalar>
-Scalar median(std::vector<Scalar>& v) {  // upper median, in place; 0 when empty (not hawor::median)
+Scalar upperMedian(std::vector<Scalar>& v) {  // in place; 0 when empty (hawor::median averages the middle two)
   if (v.empty()) return Scalar(0);
   const std::size_t m = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
@@ -162,7 +162,7 @@ Scalar medianRayAngleDeg(const std::vector<Vec2<Scalar>>& x1, const std::vector<
     const Scalar c = std::min(Scalar(1), std::max(Scalar(-1), f1.dot(f2)));
     a.push_back(std::acos(c) * Scalar(180) / Constants<Scalar>::pi());
   }
-  return median(a);
+  return upperMedian(a);
 }
 
 /// The rotation R21 minimising Σ_inliers ‖f2 − R·f1‖² over unit rays f = (x, 1)/‖(x, 1)‖ (Kabsch):
@@ -548,7 +548,7 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
   }
   auto& B = scores[static_cast<std::size_t>(best)];
   res.numInFront = static_cast<int>(B.parallaxDeg.size());
-  res.medianParallaxDeg = two_view_detail::median(B.parallaxDeg);
+  res.medianParallaxDeg = two_view_detail::upperMedian(B.parallaxDeg);
   // Most inliers behind a camera or off their rays under the best motion: a wrong motion
   // (ORB-SLAM's 0.9·N test). A translation below the rotation's noise gives such a motion its own
   // fake parallax, with depths a few baselines deep (fast_turns, 1-2 cm steps at 3 m). Refused,
@@ -650,7 +650,7 @@ TwoViewResult<Scalar> initializeTwoView(const std::vector<Vec2<Scalar>>& x1,
           par.push_back(triangulationQuality(Tid, T21, x1[k], x2[k], res.points[k]).parallaxDeg());
         }
       }
-      res.medianParallaxDeg = two_view_detail::median(par);
+      res.medianParallaxDeg = two_view_detail::upperMedian(par);
     }
     if (!changed) break;
   }
