@@ -53,10 +53,12 @@ const char* kWorldHelp =
     "  --no-ground           no ground cue (the scale from the hands alone)\n"
     "  --infill M            how unseen frames are filled (default spline)\n"
     "  --set NAME=VALUE,...  SLAM options (`hawor slam --set`)\n"
+    "  --first-camera-world  the output in the first camera's frame (default: gravity-aligned,\n"
+    "                        z up, the origin on the floor below the first camera when found)\n"
     "\n"
     "Writes DIR/world.npz (per side trans, rot, hand_pose, betas, joints_world, valid, infilled;\n"
-    "timestamps, fps: the layout of the app's export), DIR/camera.tum (camera-to-world, metres,\n"
-    "world = the first camera) and prints one JSON object (frames, scale, method, confidence,\n"
+    "timestamps, fps, z_up, origin_on_floor: the layout of the app's export), DIR/camera.tum\n"
+    "(camera-to-world, metres, in that world) and prints one JSON object (frames, scale, method, confidence,\n"
     "intrinsics, SLAM counts, warnings).\n";
 
 const char* const kSides[2] = {"left", "right"};
@@ -163,6 +165,8 @@ void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>&
   for (size_t t = 0; t < T; ++t) stamps[t] = double(t) / r.fps;
   z.set("timestamps", hawor::NpyArray::fromVector(stamps));
   z.set("fps", hawor::NpyArray::fromData(&r.fps, {}));
+  z.set("z_up", hawor::NpyArray::fromRaw("|b1", {}, {uint8_t(r.world.up != "none" ? 1 : 0)}));
+  z.set("origin_on_floor", hawor::NpyArray::fromRaw("|b1", {}, {uint8_t(r.world.originOnFloor ? 1 : 0)}));
   z.write(path);
 }
 
@@ -171,7 +175,7 @@ void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>&
 int cmdWorld(int argc, char** argv) {
   const Args args(argc, argv, 2,
                   {"images", "hands", "out", "intrinsics", "fov", "camera", "fps", "readout", "mano", "eye-height", "infill", "set"},
-                  {"no-refine-focal", "no-ground"});
+                  {"no-refine-focal", "no-ground", "first-camera-world"});
   if (args.help()) {
     std::fputs(kWorldHelp, stdout);
     return 0;
@@ -204,6 +208,7 @@ int cmdWorld(int argc, char** argv) {
   po.refineFocal = !args.flag("no-refine-focal");
   po.eyeHeight = args.number("eye-height", 1.6);
   po.groundScale = !args.flag("no-ground");
+  po.gravityAligned = !args.flag("first-camera-world");
   if (args.has("infill")) po.infill = hawor::parseInfillMethod(args.get("infill", "spline"));
   for (const std::string& s : args.all("set")) po.slamSet += (po.slamSet.empty() ? "" : ",") + s;
   try {
@@ -262,6 +267,10 @@ int cmdWorld(int argc, char** argv) {
       .num("scale", r.scale)
       .str("method", r.scaleMethod)
       .num("confidence", r.scaleConfidence)
+      .str("world", r.world.up == "none" ? "first-camera" : "z-up")
+      .str("up", r.world.up)
+      .num("up_confidence", r.world.upConfidence)
+      .str("origin", r.world.originOnFloor ? "floor" : "first-camera")
       .num("fx", r.camera.fx)
       .num("fy", r.camera.fy)
       .raw("focal_refined", r.focal.refined ? "true" : "false")

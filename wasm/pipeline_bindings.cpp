@@ -5,7 +5,7 @@
 //       intrinsics [fx, fy, cx, cy] (the video's), width, height, lens?, fps?, readout?,
 //       slamMaxSide?, maskDilatePx?, refineFocal?, focalPriorSigma?, userFocal?, focalMaxPasses?,
 //       focalRerunBytes?, set? (SlamOptions "NAME=VALUE,..."), infill? ('spline'|'lerp'|'last'),
-//       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks? }   (pipeline/options.hpp)
+//       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks?, gravityAligned? }   (pipeline/options.hpp)
 //     .slamSize() -> {width, height, intrinsics: [fx, fy, cx, cy]} (the SLAM's virtual camera)
 //     .push(frame: Uint8Array (width*height*c, c = 1, 3, 4; or the SLAM's grey frame),
 //           detections: [{keypoints2d (42), keypoints3d (63) | null, pRight, track (-1: none)}])
@@ -14,7 +14,7 @@
 //       from another regressor; pose objects as HandModel.forward takes)
 //     .finishCamera() -> {keyframeFrames: Int32Array, initialised}
 //     .finish(depthMaps: [Float32Array (SLAM width*height)] | null) -> the result (run.mjs's
-//       header: intrinsics' focal fields, slam, camera, points, scale, hands, noHands, warnings,
+//       header: intrinsics' focal fields, slam, world, camera, points, scale, hands, noHands, warnings,
 //       timings).
 //   new SideAssigner(reach px).assign(detections) -> Int32Array(2) (detection per side, -1 none):
 //       the side policy alone, frame by frame (web/tools/eval_kitchen_hands.mjs).
@@ -126,6 +126,13 @@ val resultToJs(const Result& r, const hawor::PipelineOptions<double>& opt, const
   sl.set("numHeadModelFrames", s.numHeadModelFrames);
   sl.set("initialised", s.initialised);
   o.set("slam", sl);
+  val wo = val::object();  // the output's world (pipeline/world_frame.hpp)
+  wo.set("convention", opt.gravityAligned ? std::string("z-up") : std::string("first-camera"));
+  wo.set("up", r.world.up);
+  wo.set("upConfidence", r.world.upConfidence);
+  wo.set("origin", r.world.originOnFloor ? std::string("floor") : std::string("first-camera"));
+  wo.set("upFirstCamera", f64(r.world.upFirstCamera.data(), 3));
+  o.set("world", wo);
   std::vector<double> pos(3 * T), quat(4 * T), stamps(T);
   std::vector<uint8_t> status(T);
   for (size_t t = 0; t < T; ++t) {
@@ -197,6 +204,7 @@ hawor::PipelineOptions<double> optionsFrom(const val& o) {
   flag("groundScale", p.groundScale);
   num("eyeHeight", p.eyeHeight);
   flag("depthMasks", p.depthMasks);
+  flag("gravityAligned", p.gravityAligned);
   return p;
 }
 

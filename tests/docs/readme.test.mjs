@@ -47,6 +47,10 @@ const FILES = [
 const EXPECT = [
   ['run ~/clips/kitchen.mp4 --out ~/hawor-out/kitchen --fov', (h) => resultFrames(join(h, 'hawor-out/kitchen'))],
   ['for v in ~/clips/*.mp4', (h) => resultFrames(join(h, 'hawor-out/desk'))],
+  ['hawor world --images ~/frames/kitchen', (h, out) => {
+    assert.ok(existsSync(join(h, 'hawor-out/kitchen-world/world.npz')) && existsSync(join(h, 'hawor-out/kitchen-world/camera.tum')));
+    assert.equal(JSON.parse(out.trim().split('\n').pop()).frames, JSON.parse(readFileSync(join(h, 'hawor-out/kitchen/result.json'), 'utf8')).frameCount);
+  }],
   ['~/my_app/build/my_app', (h, out) => assert.match(out, /1360 vertices, 21 keypoints, PA-MPJPE 0\.0000\d\d mm/)],
   ['npx hawor run --sample', (h) => resultFrames(join(h, 'my_js_app/sample-out'))],
   ['node example.mjs', (h, out) => assert.match(out, /^function function \[ ?0, ?0, ?0, ?1 ?\]$/m)],

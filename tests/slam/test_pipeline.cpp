@@ -47,7 +47,9 @@ double median(std::vector<double> v) {
 
 struct Outcome {
   hawor::PipelineResult<double> result;
-  std::vector<V3> gtCam;                  // camera centres, room frame
+  std::vector<V3> gtCam;                  // camera centres, the generator's world (the first camera's)
+  std::vector<hawor::Mat3<double>> roomR;  // camera-to-room rotations (the room: z up, floor at z = 0)
+  std::vector<double> roomZ;               // camera heights above the floor
   std::vector<std::array<V3, 2>> gtWrist;  // world wrists (room frame), NaN where the hand is unseen
   std::vector<std::array<V3, 2>> gtWristCam;
   std::vector<std::array<bool, 2>> seen;
@@ -55,7 +57,7 @@ struct Outcome {
 
 /// `frames` frames of a preset through the pipeline: the ground-truth camera-frame hands
 /// (pushHands) or their keypoints as detections (push: 2D projections, metric 3D keypoints).
-Outcome runPipeline(const std::string& preset, int frames, bool detections, std::uint64_t seed = 1) {
+Outcome runPipeline(const std::string& preset, int frames, bool detections, std::uint64_t seed = 1, bool groundCue = true) {
   hs::SynthOptions so;
   so.width = 640;
   so.height = 480;
@@ -66,12 +68,15 @@ Outcome runPipeline(const std::string& preset, int frames, bool detections, std:
   po.camera = seq.camera();
   po.userFocal = true;
   po.refineFocal = false;
+  po.groundScale = groundCue;
   hawor::Pipeline<double> p(po, leftModel(), rightModel());
   Outcome o;
   hs::SynthFrame<double> fr;
   for (int i = 0; i < seq.numFrames(); ++i) {
     seq.renderFrame(i, fr);
     o.gtCam.push_back(fr.worldFromCamera.t);
+    o.roomR.push_back(seq.roomFromCamera(i).R);
+    o.roomZ.push_back(seq.roomFromCamera(i).t(2));
     std::array<V3, 2> w, wc;
     std::array<bool, 2> seen{};
     std::array<const hawor::HandPose<double>*, 2> given{nullptr, nullptr};
@@ -192,6 +197,47 @@ TEST_CASE("pipeline: camera-frame hands from another regressor to a metric world
   INFO("world wrist error, median " << median(err) << " m");
   CHECK(median(err) < 0.05);
   CHECK(r.timings.count("slam") == 1);
+}
+
+TEST_CASE("pipeline: the output's world is gravity-aligned, z up, the origin on the floor (walk and table_work)", "[pipeline]") {
+  for (const char* preset : {"walk", "table_work", "walk (no ground cue)"}) {
+    const bool ground = std::string(preset).find("no ground") == std::string::npos;
+    const Outcome o = runPipeline(ground ? preset : "walk", 60, false, 1, ground);
+    const hawor::PipelineResult<double>& r = o.result;
+    // up in each camera's frame, estimated against the room's (independent of yaw and origin)
+    double worst = 0;
+    for (std::size_t t = 0; t < o.roomR.size(); ++t) {
+      const V3 est = r.cameraPoses[t].rotationMatrix().transpose() * V3::UnitZ();
+      const V3 gt = o.roomR[t].transpose() * V3::UnitZ();
+      worst = std::max(worst, std::acos(std::min(1.0, est.dot(gt))) * 180 / M_PI);
+    }
+    INFO(preset << ": up from " << r.world.up << " (confidence " << r.world.upConfidence << "), origin on the floor " << r.world.originOnFloor
+                << ", worst up error " << worst << " deg; first camera at height " << r.cameraPoses[0].translation()(2) << " m (truth "
+                << o.roomZ[0] << ")");
+    CHECK(r.world.up == (ground ? "floor" : "camera"));
+    CHECK(worst < (ground ? 2.0 : 5.0));
+    // the first camera looks along +y, horizontally
+    const V3 f0 = r.cameraPoses[0].rotationMatrix().col(2);
+    CHECK(std::abs(f0(0)) < 1e-9);
+    CHECK(f0(1) > 0);
+    const V3 c0 = r.cameraPoses[0].translation();
+    CHECK(std::abs(c0(0)) < 1e-9);
+    CHECK(std::abs(c0(1)) < 1e-9);
+    if (r.world.originOnFloor) {
+      CHECK(std::abs(c0(2) - o.roomZ[0]) < 0.15 * o.roomZ[0]);  // the metric scale's error, nothing more
+    } else {
+      CHECK(std::abs(c0(2)) < 1e-9);
+    }
+  }
+  // off: the first camera's frame
+  hawor::PipelineOptions<double> po;
+  po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;
+  po.gravityAligned = false;
+  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  p.push(hawor::ImageU8(640, 480, 1, 80), {});
+  const hawor::PipelineResult<double> r = p.finish();
+  CHECK(r.world.up == "none");
+  CHECK(r.cameraPoses[0].translation().norm() < 1e-12);
 }
 
 TEST_CASE("pipeline: detections fitted, sides kept, masks for the SLAM (hands_cover, 40 frames)", "[pipeline]") {

@@ -147,6 +147,11 @@ test('gltf: valid GLB; three.js reads the hands, camera, path and points with th
   assert.ok(Math.abs(p.getX(1) - (1 - 0.1)) < 1e-6);
   const world = new THREE.Vector3(0, 1, 0).applyQuaternion(gltf.scene.getObjectByName('hawor_world').quaternion);
   assert.ok(Math.abs(world.y + 1) < 1e-6, 'y down becomes y up');
+  // A gravity-aligned result (z up): its z becomes glTF's y.
+  const g2 = buildGlb({ fps, frameCount: T, camera, world: { convention: 'z-up' } });
+  const zUp = await new Promise((res, rej) => new GLTFLoader().parse(g2.buffer.slice(g2.byteOffset, g2.byteOffset + g2.byteLength), '', res, rej));
+  const upward = new THREE.Vector3(0, 0, 1).applyQuaternion(zUp.scene.getObjectByName('hawor_world').quaternion);
+  assert.ok(Math.abs(upward.y - 1) < 1e-6, 'z up becomes y up');
   // Bad input is refused.
   assert.throws(() => buildGlb({ fps: 0, frameCount: T }), /fps/);
   assert.throws(() => buildGlb({ fps, frameCount: T, hands: { left: tinyHand(4, 0) } }), /vertex values/);

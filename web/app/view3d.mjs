@@ -56,7 +56,8 @@ export class SceneView {
     const sun = new THREE.DirectionalLight(0xffffff, 1.2);
     sun.position.set(1, 2, 1.5);
     this.scene.add(sun);
-    // hawor's world is the first camera's OpenCV frame (y down): turned to three's y up.
+    // hawor's world (z up, or the first camera's OpenCV frame, y down) turned to three's y up in
+    // setResult.
     this.world = new THREE.Group();
     this.world.rotation.x = Math.PI;
     this.scene.add(this.world);
@@ -89,6 +90,8 @@ export class SceneView {
     this.clear();
     const T = result.frameCount;
     const o = { T, hands: {}, meshes };
+    const zUp = result.world && result.world.convention === 'z-up';
+    this.world.rotation.x = zUp ? -Math.PI / 2 : Math.PI;
     const box = new THREE.Box3();
     // Hands: one mesh per side, its vertices replaced every frame.
     for (const side of ['left', 'right']) {
@@ -170,7 +173,8 @@ export class SceneView {
     if (!box.isEmpty()) {
       this.world.updateMatrixWorld(true);
       const cen = box.getCenter(new THREE.Vector3()).applyMatrix4(this.world.matrixWorld);
-      this.grid.position.set(cen.x, cen.y - size * 0.6, cen.z);
+      // the floor where it was found (the world's z = 0), else below the scene
+      this.grid.position.set(cen.x, zUp && result.world.origin === 'floor' ? 0 : cen.y - size * 0.6, cen.z);
       this.controls.target.copy(cen);
       this.camera.position.copy(cen).add(new THREE.Vector3(0.9, 0.7, 1.3).multiplyScalar(size));
       this.camera.near = size / 200; this.camera.far = size * 200; this.camera.updateProjectionMatrix();

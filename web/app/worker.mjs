@@ -220,7 +220,7 @@ async function exportResult(format) {
     const meshes = meshesOf(r, state.hands);
     const cam = r.camera || {};
     const glb = buildGlb({
-      fps: r.fps, frameCount: r.frameCount, hands: meshes, points: r.points,
+      fps: r.fps, frameCount: r.frameCount, hands: meshes, points: r.points, world: r.world,
       camera: cam.positions && cam.quaternions ? { positions: cam.positions, quaternions: cam.quaternions, width: r.width, height: r.height, fx: r.intrinsics.fx, fy: r.intrinsics.fy } : null,
     });
     return { data: glb, mime: 'model/gltf-binary', filename: 'hawor.glb' };

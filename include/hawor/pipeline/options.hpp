@@ -41,6 +41,10 @@ struct PipelineOptions {
   Scalar minHandDepth = Scalar(0.03), maxHandDepth = Scalar(5);
   InfillMethod infill = InfillMethod::Spline;
   int handScaleSmooth = 0;               ///< experiment: moving-average half-width of the wrists before the hand cue
+  // --- the output ---
+  /// The world: gravity-aligned, z up, the origin on the floor below the first camera
+  /// (world_frame.hpp); false: the first camera's frame (x right, y down, z forward).
+  bool gravityAligned = true;
   // --- metric scale ---
   bool groundScale = true;               ///< the ground cue: the cameras' height above the map's floor
   Scalar eyeHeight = Scalar(1.6);        ///< that height in metres (a standing adult's head camera)

@@ -23,7 +23,8 @@
 // (scale/metric_scale.hpp: a depth network on the keyframes, the hands, the floor under the
 // cameras), the camera and the map in metres, each hand's camera-frame motion taken to the world
 // (motion/canonical.hpp), the unseen frames filled (motion/infill.hpp), and the keypoints of the
-// world motion. The world is the first camera's frame.
+// world motion. The world is gravity-aligned (world_frame.hpp: z up, the origin on the floor
+// below the first camera when the floor was found), or the first camera's (gravityAligned off).
 // Not thread-safe; one object per video. The hand models must outlive it.
 #pragma once
 
@@ -47,6 +48,7 @@
 #include "hawor/pipeline/options.hpp"
 #include "hawor/pipeline/result.hpp"
 #include "hawor/pipeline/sides.hpp"
+#include "hawor/pipeline/world_frame.hpp"
 #include "hawor/render/hand_masks.hpp"
 #include "hawor/render/rectify.hpp"
 #include "hawor/render/resample.hpp"
@@ -252,10 +254,16 @@ class Pipeline {
     auto t0 = Clock::now();
     metricScale(res, depthMaps);
     addTime("scale", t0);
-    const Scalar s = scale_ = res.scale;
+    const Scalar s = res.scale;
     for (const SE3<Scalar>& P : slam_result_.poses) res.cameraPoses.emplace_back(P.rotation(), Vec3<Scalar>(s * P.translation()));
     for (const Vec3<Scalar>& X : slam_result_.points) res.points.push_back(s * X);
-    for (int side = 0; side < 2; ++side) toWorld(side, res.hands[side]);
+    if (opt_.gravityAligned) {
+      // the output's world: z up, the origin on the floor below the first camera (world_frame.hpp)
+      res.world = gravityAlignedWorld(res.cameraPoses, res.scaleCues.groundRan ? &res.scaleCues.ground : nullptr, s);
+      for (SE3<Scalar>& P : res.cameraPoses) P = res.world.fromFirstCamera * P;
+      for (Vec3<Scalar>& X : res.points) X = res.world.fromFirstCamera * X;
+    }
+    for (int side = 0; side < 2; ++side) toWorld(side, res.cameraPoses, res.hands[side]);
     res.slam = std::move(slam_result_);
     res.warnings = warnings_;
     res.timings = timings_;
@@ -574,8 +582,9 @@ class Pipeline {
     }
   }
 
-  /// Side s's motion in the world (metres), the unseen frames filled, and its keypoints.
-  void toWorld(int s, PipelineHand<Scalar>& h) {
+  /// Side s's motion in the world of the (metric) camera poses, the unseen frames filled, and its
+/// keypoints.
+  void toWorld(int s, const std::vector<SE3<Scalar>>& cameraPoses, PipelineHand<Scalar>& h) {
     const Eigen::Index T = static_cast<Eigen::Index>(frames_.size());
     const HandModel<Scalar>& model = *models_[s];
     const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
@@ -591,9 +600,9 @@ class Pipeline {
     for (Sequence<Scalar>* a : {&cam.rot, &cam.trans, &cam.hand_pose, &cam.betas}) *a = a->unaryExpr([](Scalar v) { return std::isfinite(double(v)) ? v : Scalar(0); });
     std::vector<Mat3<Scalar>> R;
     std::vector<Vec3<Scalar>> t;
-    for (const SE3<Scalar>& P : slam_result_.poses) {
+    for (const SE3<Scalar>& P : cameraPoses) {
       R.push_back(P.rotationMatrix());
-      t.push_back(P.translation() * scale_);
+      t.push_back(P.translation());
     }
     HandMotion<Scalar> world = cameraToWorld(cam, R, t, restRootJoints(model, cam));
     addTime("world", t0);
@@ -644,7 +653,6 @@ class Pipeline {
   int fitFailures_ = 0;
   bool handsGiven_ = false, cameraDone_ = false, finished_ = false;
   PipelineFocal<Scalar> focal_;
-  Scalar scale_ = Scalar(1);  ///< metres per SLAM unit (finish)
   std::vector<std::string> warnings_;
   std::map<std::string, double> timings_;
 };

@@ -13,6 +13,7 @@
 #include "hawor/geometry/camera.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/motion/hand_motion.hpp"
+#include "hawor/pipeline/world_frame.hpp"
 #include "hawor/scale/metric_scale.hpp"
 #include "hawor/slam/mono_slam.hpp"
 
@@ -57,8 +58,9 @@ struct PipelineResult {
   Scalar scale = Scalar(1);                ///< metres per SLAM unit (1 with method "none")
   std::string scaleMethod = "none";        ///< depth | hands | ground | fused | none
   Scalar scaleConfidence = Scalar(0);
+  WorldFrame<Scalar> world;                ///< the output's world and how it was found (up "none": the first camera's)
   std::vector<SE3<Scalar>> cameraPoses;    ///< camera-to-world, metres
-  std::vector<Vec3<Scalar>> points;        ///< the SLAM's map, metres
+  std::vector<Vec3<Scalar>> points;        ///< the SLAM's map, metres, in the output's world
   std::array<PipelineHand<Scalar>, 2> hands;  ///< left, right
   bool noHands = true;
   std::vector<std::string> warnings;

@@ -73,6 +73,7 @@ struct GroundScaleResult {
   Scalar height = std::numeric_limits<Scalar>::quiet_NaN();  ///< median camera height, map units
   Scalar heightSpread = std::numeric_limits<Scalar>::quiet_NaN();  ///< relative (MAD / median)
   Vec3<Scalar> up = Vec3<Scalar>::Zero();  ///< world up (unit), map frame
+  Scalar floorLevel = std::numeric_limits<Scalar>::quiet_NaN();  ///< the floor plane up·X = floorLevel, map units
   int floorPoints = 0, levels = 0;
   Scalar surfaceHeight = std::numeric_limits<Scalar>::quiet_NaN();  ///< work surface (m), if seen
   bool ambiguous = false;                  ///< one level only: floor or table top
@@ -307,6 +308,7 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   r.height = H;
   r.heightSpread = madSigma(h, H) / H;
   r.up = up;
+  r.floorLevel = floorY;
   r.levels = static_cast<int>(levels.size());
   r.scale = opt.eyeHeight / H;
   r.floorWidth = ground_detail::narrowWidth(floorLevelPts, up) / H;

@@ -10,14 +10,16 @@
 // Blender's importer and three.js's GLTFLoader. Frames filled by the infiller use a paler
 // material of the hand's colour (names end in `_infilled`).
 //
-// Coordinates: the hawor world is the first camera's OpenCV frame (x right, y down, z forward),
-// metres. glTF is y up: the root node `hawor_world` turns the world by 180° about x (so the
-// numbers inside stay exactly the result's). The camera node carries the camera-to-world pose;
+// Coordinates: the hawor world is gravity-aligned with z up (`world.convention` 'z-up', the
+// pipeline's default) or the first camera's OpenCV frame (x right, y down, z forward), metres.
+// glTF is y up: the root node `hawor_world` turns the world by −90° about x (z up) or 180° about
+// x (y down), so the numbers inside stay exactly the result's. The camera node carries the camera-to-world pose;
 // its child `camera_optical` turns OpenCV's camera axes into glTF's (looking down −z, y up).
 
 const FLOAT = 5126, UINT16 = 5123, UINT32 = 5125;
 const ARRAY_BUFFER = 34962, ELEMENT_ARRAY_BUFFER = 34963;
 const RX_PI = [1, 0, 0, 0];  // quaternion (x, y, z, w) of 180° about x
+const RX_MINUS_HALF_PI = [-Math.SQRT1_2, 0, 0, Math.SQRT1_2];  // −90° about x: z up becomes y up
 
 const COLORS = {
   left: [0.184, 0.490, 0.965],
@@ -102,7 +104,7 @@ class Builder {
 ///   camera: null or { positions (T,3), quaternions (T,4) x,y,z,w camera-to-world, width,
 ///          height, fx, fy } (flat or nested)
 ///   points: null or (N,3) world points
-export function buildGlb({ fps, frameCount, hands = {}, camera = null, points = null, name = 'hawor' }) {
+export function buildGlb({ fps, frameCount, hands = {}, camera = null, points = null, world = null, name = 'hawor' }) {
   if (!(fps > 0)) throw new Error('gltf: fps must be > 0');
   const T = frameCount;
   if (!Number.isInteger(T) || T < 1) throw new Error('gltf: frameCount must be a positive integer');
@@ -183,7 +185,7 @@ export function buildGlb({ fps, frameCount, hands = {}, camera = null, points = 
     }
   }
 
-  const root = b.node({ name: 'hawor_world', rotation: RX_PI, children: rootChildren });
+  const root = b.node({ name: 'hawor_world', rotation: world && world.convention === 'z-up' ? RX_MINUS_HALF_PI : RX_PI, children: rootChildren });
   b.json.scenes.push({ name, nodes: [root] });
   b.json.scene = 0;
   if (anim.channels.length) b.json.animations.push(anim);

@@ -86,7 +86,9 @@
 //           groundScale? (true)          the ground cue of the metric scale: the cameras' height
 //                                        above the map's floor plane (scale/ground_scale.hpp)
 //           eyeHeight? (1.6)             that height in metres (a standing adult's head camera;
-//                                        about 1.2 sitting) }
+//                                        about 1.2 sitting)
+//           gravityAligned? (true)       the output's world z up with the origin on the floor
+//                                        below the first camera (false: the first camera's) }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
@@ -106,6 +108,10 @@
 //                 SLAM ran again with the refined focal) },
 //   slam: { width, height, numKeyframes, numLosses, numResets, numRelocalisations, numPlaceRelocalisations, numRevisitPoints,
 //           numPlaceLinks, numPlacedSegments, numRefinedFrames, numHeadModelFrames, initialised },
+//   world: { convention: 'z-up' (gravity-aligned: z up, the first camera looking along +y) or
+//            'first-camera' (its OpenCV frame: x right, y down, z forward), up: 'floor' (the
+//            map's floor plane) | 'camera' (the cameras' axes) | 'none', upConfidence (0..1),
+//            origin: 'floor' (below the first camera) | 'first-camera', upFirstCamera (3) },
 //   camera: { positions (T*3, metres, camera centre in the world), quaternions (T*4, x y z w,
 //             camera-to-world rotation), status (T: 0 tracked, 1 interpolated, 2 lost,
 //             3 relocalised), timestamps (T, seconds) },
@@ -349,6 +355,7 @@ export async function runPipeline(source, options, hooks = {}) {
       ...(options.handScaleSmooth !== undefined ? { handScaleSmooth: options.handScaleSmooth } : {}),
       ...(options.eyeHeight !== undefined ? { eyeHeight: options.eyeHeight } : {}),
       infill: options.infill ?? 'spline', groundScale: options.groundScale ?? true, depthMasks: !!depthModel,
+      gravityAligned: options.gravityAligned ?? true,
     }, models.left, models.right);
     owned.push(pipeline);
     const ss = pipeline.slamSize();
@@ -445,6 +452,7 @@ export async function runPipeline(source, options, hooks = {}) {
       threads: options.threads ?? 1,
       intrinsics: intrOut,
       slam: r.slam,
+      world: r.world,
       camera: r.camera,
       points: r.points,
       scale: r.scale,
