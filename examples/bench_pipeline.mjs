@@ -274,7 +274,8 @@ async function main() {
         const timing = { decode: 0 };
         const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
-        const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads,
+        // the generator's world is the first camera's: the output in that frame too
+        const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads, gravityAligned: false,
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
           ...(o.tracker ? { tracker: o.tracker } : {}),
           ...(seq.lens !== 'pinhole' ? { camera: seq.lens } : {}),

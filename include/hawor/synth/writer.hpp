@@ -24,6 +24,7 @@
 //                            a benchmark should apply (ffmpeg arguments for this size), and per
 //                            frame the sub-frames, the exposure gain and the white balance
 //   DIR/meta.json            preset, seed, sizes, mask labels, gravity in the world frame, the
+//                            first camera's height above the floor (metres), the
 //                            capture profile (with capture effects), and the caller's extra
 //                            string fields (e.g. the hand-model files)
 // The clean capture (CaptureOptions::isClean) writes neither the lens line nor capture.json.
@@ -288,6 +289,8 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
   m += "  \"gravity_world\": [" + detail::formatShortest(static_cast<double>(g.x()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.y()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.z()), false) + "],\n";
+  // the room's floor is at z = 0 (scene.hpp): the first camera's height above it
+  m += "  \"first_camera_height\": " + detail::formatShortest(static_cast<double>(seq.roomFromCamera(0).t(2)), false) + ",\n";
   if (!co.isClean()) m += "  \"capture\": " + jsonQuote(co.profile) + ",\n";
   m += "  \"mask_labels\": {\"left\": " + std::to_string(int(SynthSequence<Scalar>::kLeftLabel)) +
        ", \"right\": " + std::to_string(int(SynthSequence<Scalar>::kRightLabel)) + "},\n";
