@@ -944,3 +944,6 @@ EMSCRIPTEN_BINDINGS(hawor_core) {
   emscripten::function("writeNpz", &writeNpz);
   emscripten::function("errorMessage", &errorMessage);
 }
+
+// The pipeline object (its own file, the same translation unit).
+#include "pipeline_bindings.hpp"

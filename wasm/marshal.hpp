@@ -1,5 +1,5 @@
 // hawor_core's marshalling between JavaScript values and the library's types, shared by the
-// binding files (bindings.cpp: the library's parts; pipeline_bindings.cpp: the pipeline). No
+// binding files (bindings.cpp: the library's parts; pipeline_bindings.hpp: the pipeline). No
 // algorithm lives here.
 #pragma once
 

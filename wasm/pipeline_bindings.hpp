@@ -19,6 +19,10 @@
 //   new SideAssigner(reach px).assign(detections) -> Int32Array(2) (detection per side, -1 none):
 //       the side policy alone, frame by frame (web/tools/eval_kitchen_hands.mjs).
 // The models must outlive the pipeline (delete the pipeline first).
+// Included at the end of bindings.cpp: one translation unit, so that the SLAM, the fit and the
+// scale are compiled once (a second unit doubled the core's compile time).
+#pragma once
+
 #include <emscripten/bind.h>
 #include <emscripten/val.h>
 
