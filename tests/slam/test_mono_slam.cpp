@@ -8,10 +8,9 @@
 #include <vector>
 
 #include "hawor/eval/camera_metrics.hpp"
-#include "hawor/hand/mirror.hpp"
-#include "hawor/hand/synthetic_hand.hpp"
 #include "hawor/slam/mono_slam.hpp"
 #include "hawor/synth/synth.hpp"
+#include "synth_support.hpp"
 
 template class hawor::MonoSlam<float>;
 template class hawor::MonoSlam<double>;
@@ -28,25 +27,15 @@ struct Run {
   double path = 0;
 };
 
-const hawor::HandModel<double>& rightHand() {
-  static const hawor::HandModel<double> r = hawor::makeSyntheticHand<double>();
-  return r;
-}
-const hawor::HandModel<double>& leftHand() {
-  static const hawor::HandModel<double> l = hawor::mirrorHandModel(rightHand());
-  return l;
-}
+using slam_test::leftHand;
+using slam_test::rightHand;
 
 /// `coverFrom`..`coverTo` (inclusive): frames whose mask covers the whole image (a hand over the
 /// lens), `opt` the SLAM options (useMasks is set from `masks`), `textureDivisor` the scene's
 /// (2: coarser textures, quicker to set up; 1: those of `hawor synth` and bench_slam).
 Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t seed, int coverFrom = -1, int coverTo = -2,
               hawor::SlamOptions<double> opt = {}, int textureDivisor = 2) {
-  hs::SynthOptions so;
-  so.width = 640;
-  so.height = 480;
-  so.frames = frames;
-  so.textureDivisor = textureDivisor;
+  const hs::SynthOptions so = slam_test::sequenceOptions(frames, textureDivisor);
   hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
   opt.useMasks = masks;
   hawor::MonoSlam<double> slam(seq.camera(), opt);
@@ -73,11 +62,7 @@ Run runPreset(const std::string& preset, int frames, bool masks, std::uint64_t s
 /// The preset's first `frames` frames played `passes` times, forward and backward in turn (the
 /// frame at a turning point not repeated): a wearer going back and forth over the same places.
 Run runPasses(const std::string& preset, int frames, int passes, std::uint64_t seed, hawor::SlamOptions<double> opt = {}) {
-  hs::SynthOptions so;
-  so.width = 640;
-  so.height = 480;
-  so.frames = frames;
-  so.textureDivisor = 2;
+  const hs::SynthOptions so = slam_test::sequenceOptions(frames);
   hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
   opt.useMasks = true;
   hawor::MonoSlam<double> slam(seq.camera(), opt);

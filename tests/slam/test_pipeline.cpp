@@ -9,10 +9,9 @@
 #include <vector>
 
 #include "hawor/geometry/alignment.hpp"
-#include "hawor/hand/mirror.hpp"
-#include "hawor/hand/synthetic_hand.hpp"
 #include "hawor/pipeline/pipeline.hpp"
 #include "hawor/synth/synth.hpp"
+#include "synth_support.hpp"
 
 // double only: every driver runs the pipeline in double, and its parts are instantiated and
 // tested in float and double in their own modules (MonoSlam<float> beside it in this unit); a
@@ -24,14 +23,8 @@ namespace {
 namespace hs = hawor::synth;
 using V3 = hawor::Vec3<double>;
 
-const hawor::HandModel<double>& rightModel() {
-  static const hawor::HandModel<double> r = hawor::makeSyntheticHand<double>();
-  return r;
-}
-const hawor::HandModel<double>& leftModel() {
-  static const hawor::HandModel<double> l = hawor::mirrorHandModel(rightModel());
-  return l;
-}
+using slam_test::leftHand;
+using slam_test::rightHand;
 
 hawor::HandDetection<double> det(double x, double pRight, int track = -1) {
   hawor::HandDetection<double> d;
@@ -60,18 +53,14 @@ struct Outcome {
 /// `frames` frames of a preset through the pipeline: the ground-truth camera-frame hands
 /// (pushHands) or their keypoints as detections (push: 2D projections, metric 3D keypoints).
 Outcome runPipeline(const std::string& preset, int frames, bool detections, std::uint64_t seed = 1, bool groundCue = true) {
-  hs::SynthOptions so;
-  so.width = 640;
-  so.height = 480;
-  so.frames = frames;
-  so.textureDivisor = 2;
-  hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftModel(), rightModel(), so);
+  const hs::SynthOptions so = slam_test::sequenceOptions(frames);
+  hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
   hawor::PipelineOptions<double> po;
   po.camera = seq.camera();
   po.userFocal = true;
   po.refineFocal = false;
   po.groundScale = groundCue;
-  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  hawor::Pipeline<double> p(po, leftHand(), rightHand());
   Outcome o;
   hs::SynthFrame<double> fr;
   for (int i = 0; i < seq.numFrames(); ++i) {
@@ -235,7 +224,7 @@ TEST_CASE("pipeline: the output's world is gravity-aligned, z up, the origin on 
   hawor::PipelineOptions<double> po;
   po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;
   po.gravityAligned = false;
-  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  hawor::Pipeline<double> p(po, leftHand(), rightHand());
   p.push(hawor::ImageU8(640, 480, 1, 80), {});
   const hawor::PipelineResult<double> r = p.finish();
   CHECK(r.world.up == "none");
@@ -274,18 +263,18 @@ TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]
   {
     hawor::PipelineOptions<double> bad = po;
     bad.fps = 0;
-    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("fps"));
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftHand(), rightHand())), Catch::Contains("fps"));
     bad = po;
     bad.lens = "fisheye:nan,0,0,0";
-    CHECK_THROWS((hawor::Pipeline<double>(bad, leftModel(), rightModel())));
+    CHECK_THROWS((hawor::Pipeline<double>(bad, leftHand(), rightHand())));
     bad = po;
     bad.eyeHeight = 12;
-    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("height above the floor"));
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftHand(), rightHand())), Catch::Contains("height above the floor"));
     bad = po;
     bad.slamSet = "noSuchOption=1";
-    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftModel(), rightModel())), Catch::Contains("noSuchOption"));
+    CHECK_THROWS_WITH((hawor::Pipeline<double>(bad, leftHand(), rightHand())), Catch::Contains("noSuchOption"));
   }
-  hawor::Pipeline<double> p(po, leftModel(), rightModel());
+  hawor::Pipeline<double> p(po, leftHand(), rightHand());
   CHECK_THROWS_WITH(p.finishCamera(), Catch::Contains("no frames"));
   hawor::ImageU8 wrong(320, 200, 3);
   CHECK_THROWS_WITH(p.push(wrong, {}), Catch::Contains("320x200x3"));
@@ -296,7 +285,7 @@ TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]
   d[0].keypoints2d(3, 1) = 1;
   d[0].pRight = 2;
   CHECK_THROWS_WITH(p.push(im, d), Catch::Contains("pRight"));
-  hawor::HandPose<double> nanPose = hawor::HandPose<double>::zero(leftModel());
+  hawor::HandPose<double> nanPose = hawor::HandPose<double>::zero(leftHand());
   nanPose.transl(0) = NAN;
   CHECK_THROWS_WITH(p.pushHands(im, {&nanPose, nullptr}), Catch::Contains("the left hand: parameters are not finite"));
   // a grey frame at the SLAM's size is taken as it is, then one frame gives a held camera

@@ -159,7 +159,7 @@ class Pipeline {
       }
       o.reprojRmsPx = Scalar(0);
       o.fitted = believable(o);
-      info.detection[s] = o.detected ? s : -1;
+      info.detection[s] = s;
       info.valid[s] = o.fitted;
     }
     info.slamStatus = trackFrame(image);
