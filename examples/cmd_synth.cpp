@@ -54,7 +54,7 @@ const char* kSynthHelp =
     "\n"
     "Writes DIR/rgb/000000.png ..., DIR/mask/000000.png (0 background, 128 left hand, 255 right\n"
     "hand), DIR/depth/000000.npy (float32 metres along the optical axis), DIR/camera_gt.tum\n"
-    "(camera-to-world, timestamps frame/fps; world = the first camera's frame), DIR/hands_gt.npz\n"
+    "(camera-to-world, timestamps frame/fps; world = the room: z up, floor at z = 0), DIR/hands_gt.npz\n"
     "(left_/right_: trans, rot, hand_pose, betas, valid, joints_world, joints_cam, cam_rot,\n"
     "cam_trans, visible_pixels, kp_in_image (through the lens); timestamps), DIR/intrinsics.txt\n"
     "('fx fy cx cy width height fps'; with a capture profile other than clean a second line\n"

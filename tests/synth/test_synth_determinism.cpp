@@ -106,7 +106,11 @@ TEST_CASE("synth: the writer's layout, and identical bytes for identical input",
   const auto traj = hawor::readTum<double>(d1 + "/camera_gt.tum");
   REQUIRE(traj.size() == std::size_t(T));
   for (int i = 0; i < T; ++i) CHECK(traj[std::size_t(i)].t == Approx(i / 30.0));
-  CHECK(traj[0].p.norm() < 1e-9);
+  {  // the poses of the room's frame (z up, floor at z = 0): the sequence's own, to the file's digits
+    const hs::SynthSequence<double> seq(hs::findSynthPreset("fast_turns"), 9, h.left, h.right, o);
+    for (int i = 0; i < T; ++i) CHECK((traj[std::size_t(i)].p - seq.worldFromCamera(i).t).norm() < 1e-12);
+    CHECK(traj[0].p.z() > 1.0);
+  }
   const hawor::Npz z = hawor::Npz::read(d1 + "/hands_gt.npz");
   for (const char* side : {"left_", "right_"}) {
     const std::string p = side;

@@ -61,7 +61,7 @@ TEMPLATE_TEST_CASE("synth: depth is the distance along z to the first scene surf
     int tested = 0, bad = 0;
     for (int i : {0, 21, 39}) {
       seq.renderFrame(i, fr);
-      const hs::RigidPose<S>& rc = seq.roomFromCamera(i);
+      const hs::RigidPose<S>& rc = seq.worldFromCamera(i);
       for (int y = 1; y < cam.height; y += 5) {
         for (int x = 2; x < cam.width; x += 5) {
           const float z = fr.images.depth.at(x, y);
@@ -99,7 +99,7 @@ TEMPLATE_TEST_CASE("synth: the mask is where a hand mesh is nearer than the scen
     hawor::RasterOptions<S> ro;
     ro.nearPlane = S(0.01);
     hawor::Rasterizer<S> rast(cam, ro);
-    const hs::RigidPose<S> cr = seq.roomFromCamera(i).inverse();
+    const hs::RigidPose<S> cr = seq.worldFromCamera(i).inverse();
     Points3<S> sv(seq.scene().vertices.rows(), 3);
     for (Eigen::Index k = 0; k < sv.rows(); ++k) sv.row(k) = (cr.R * seq.scene().vertices.row(k).transpose() + cr.t).transpose();
     hawor::ImageF sceneDepth, handDepth[2];
@@ -147,11 +147,13 @@ TEMPLATE_TEST_CASE("synth: keypoints, hand parameters and camera poses agree", "
   for (const char* preset : {"walk", "fast_turns", "hands_cover"}) {
     hs::SynthSequence<S> seq = makeSeq<S>(preset, 11, 64, 50);
     hs::SynthFrame<S> fr;
-    // World frame = the first camera's frame.
-    const hs::RigidPose<S> w0 = seq.worldFromCamera(0);
-    CHECK((w0.R - Mat3<S>::Identity()).norm() < 1e-5);
-    CHECK(w0.t.norm() < 1e-5);
-    CHECK(seq.gravityWorld().norm() == Approx(1.0).epsilon(1e-5));
+    // World frame = the room's: z up, the floor at z = 0, every camera above it and inside the
+    // room ([0, 6] × [0, 5] × [0, 2.6], scene.hpp).
+    CHECK((seq.gravityWorld() - hawor::Vec3<S>(0, 0, -1)).norm() == 0);
+    for (int i = 0; i < seq.numFrames(); ++i) {
+      const hawor::Vec3<S> c = seq.worldFromCamera(i).t;
+      CHECK((c.x() > 0 && c.x() < 6 && c.y() > 0 && c.y() < 5 && c.z() > 1 && c.z() < 2.6));
+    }
     for (int i = 0; i < seq.numFrames(); i += 7) {
       seq.renderFrame(i, fr);
       CHECK(fr.time == Approx(i / seq.fps()));

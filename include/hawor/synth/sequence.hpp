@@ -1,10 +1,10 @@
 // hawor/synth/sequence.hpp — a synthetic egocentric sequence with ground truth: camera poses,
 // RGB, depth, hand masks, hand parameters and keypoints, for a preset and a seed.
 //
-// Frames (docs/design.md §2). The scene lives in its room frame (scene.hpp, z up). The OUTPUT world
-// frame is the first camera's frame (frame 0 has the identity pose), metres: T_w_room =
-// T_room_c(0)⁻¹. Camera poses are camera-to-world, T_w_c(i) = T_w_room·T_room_c(i), at times
-// t_i = i / fps. gravityWorld() is the world direction of gravity.
+// Frames (docs/design.md §2). The world frame is the room's (scene.hpp): z up, gravity along −z,
+// the floor at z = 0, metres, the pipeline's gravity-aligned output convention
+// (pipeline/world_frame.hpp), so gravity, floor and metric scale can be checked against it.
+// Camera poses are camera-to-world, T_w_c(i), at times t_i = i / fps.
 // Hands (docs/design.md §3). Per hand and frame the MANO parameters in the world frame: rot (axis-angle
 // of joint 0), hand_pose (the J−1 joint axis-angles), betas (fixed per sequence, shared by both
 // hands: one person), trans, with vertices = forward(rot, hand_pose, betas, trans) in world
@@ -188,17 +188,10 @@ class SynthSequence {
     return std::max(1, static_cast<int>(n + 0.5));
   }
 
-  /// T_w_room: room frame (scene.hpp) → world frame (first camera).
-  const RigidPose<Scalar>& worldFromRoom() const { return worldFromRoom_; }
-  /// T_w_c of frame i (camera-to-world); frame 0 is exactly the identity.
-  RigidPose<Scalar> worldFromCamera(int i) const {
-    const std::size_t fi = checkFrame(i);
-    return fi == 0 ? RigidPose<Scalar>() : worldFromRoom_ * roomFromCamera_[fi];
-  }
-  /// T_room_c of frame i.
-  const RigidPose<Scalar>& roomFromCamera(int i) const { return roomFromCamera_[checkFrame(i)]; }
-  /// Unit gravity direction in the world frame.
-  Vec3<Scalar> gravityWorld() const { return worldFromRoom_.R * Vec3<Scalar>(0, 0, -1); }
+  /// T_w_c of frame i (camera-to-world, the room's frame).
+  const RigidPose<Scalar>& worldFromCamera(int i) const { return worldFromCamera_[checkFrame(i)]; }
+  /// Unit gravity direction in the world frame: −z.
+  static Vec3<Scalar> gravityWorld() { return Vec3<Scalar>(0, 0, -1); }
   /// World-frame MANO parameters of a hand (kLeftHand / kRightHand) in frame i.
   const HandPose<Scalar>& handPoseWorld(int side, int i) const {
     return poses_[static_cast<std::size_t>(checkSide(side))][checkFrame(i)];
@@ -242,7 +235,7 @@ class SynthSequence {
     out.capture = CaptureFrameInfo();
     if (!opt_.capture.usesPipeline()) {
       if (!renderer_) renderer_ = std::make_unique<SceneRenderer<Scalar>>(*scene_, camera_);
-      renderer_->render(roomFromCamera_[fi], views, noise_, noiseSeed, out.images);
+      renderer_->render(worldFromCamera_[fi], views, noise_, noiseSeed, out.images);
     } else {
       const CaptureOptions& co = opt_.capture;
       if (!capture_) capture_ = std::make_unique<CaptureRenderer<Scalar>>(*scene_, camera_, lensD_, co.exposure, co.readout);
@@ -359,16 +352,15 @@ class SynthSequence {
     const double duration = static_cast<double>(frames_ - 1) / opt_.fps + 1e-9;
     SynthRng camRng(seed_, 1);
     path_ = makeCameraPath<Scalar>(preset_.motion, scene_->layout, duration, camRng);
-    roomFromCamera_.resize(static_cast<std::size_t>(frames_));
-    for (int i = 0; i < frames_; ++i) roomFromCamera_[static_cast<std::size_t>(i)] = path_.at(static_cast<double>(i) / opt_.fps);
-    worldFromRoom_ = roomFromCamera_[0].inverse();
+    worldFromCamera_.resize(static_cast<std::size_t>(frames_));
+    for (int i = 0; i < frames_; ++i) worldFromCamera_[static_cast<std::size_t>(i)] = path_.at(static_cast<double>(i) / opt_.fps);
     // Head frame: exponentially smoothed camera rotation.
     const double lag = preset_.hands.lagSeconds;
     const Scalar alpha = lag > 0 ? Scalar(1 - std::exp(-1.0 / (lag * opt_.fps))) : Scalar(1);
     std::vector<Mat3<Scalar>> head(static_cast<std::size_t>(frames_));
-    Eigen::Quaternion<Scalar> q = matrixToQuaternion(roomFromCamera_[0].R);
+    Eigen::Quaternion<Scalar> q = matrixToQuaternion(worldFromCamera_[0].R);
     for (int i = 0; i < frames_; ++i) {
-      Eigen::Quaternion<Scalar> c = matrixToQuaternion(roomFromCamera_[static_cast<std::size_t>(i)].R);
+      Eigen::Quaternion<Scalar> c = matrixToQuaternion(worldFromCamera_[static_cast<std::size_t>(i)].R);
       if (q.dot(c) < Scalar(0)) c.coeffs() = -c.coeffs();
       q.coeffs() = (Scalar(1) - alpha) * q.coeffs() + alpha * c.coeffs();
       q.normalize();
@@ -381,16 +373,16 @@ class SynthSequence {
     const int rad = sb > 0 ? static_cast<int>(std::ceil(3 * sb)) : 0;
     auto centre = [&](int j) -> Vec3<Scalar> {
       const int n = frames_ - 1;
-      if (j < 0) return Vec3<Scalar>(2 * roomFromCamera_[0].t - roomFromCamera_[static_cast<std::size_t>(std::min(-j, n))].t);
+      if (j < 0) return Vec3<Scalar>(2 * worldFromCamera_[0].t - worldFromCamera_[static_cast<std::size_t>(std::min(-j, n))].t);
       if (j > n) {
-        return Vec3<Scalar>(2 * roomFromCamera_[static_cast<std::size_t>(n)].t -
-                            roomFromCamera_[static_cast<std::size_t>(std::max(2 * n - j, 0))].t);
+        return Vec3<Scalar>(2 * worldFromCamera_[static_cast<std::size_t>(n)].t -
+                            worldFromCamera_[static_cast<std::size_t>(std::max(2 * n - j, 0))].t);
       }
-      return roomFromCamera_[static_cast<std::size_t>(j)].t;
+      return worldFromCamera_[static_cast<std::size_t>(j)].t;
     };
     for (int i = 0; i < frames_; ++i) {
       if (rad == 0) {
-        body[static_cast<std::size_t>(i)] = roomFromCamera_[static_cast<std::size_t>(i)].t;
+        body[static_cast<std::size_t>(i)] = worldFromCamera_[static_cast<std::size_t>(i)].t;
         continue;
       }
       Vec3<Scalar> acc = Vec3<Scalar>::Zero();
@@ -463,8 +455,7 @@ class SynthSequence {
           Eigen::Quaternion<Scalar> q = matrixToQuaternion(Rroom);
           Rroom = q.slerp(wBest, fz->q).toRotationMatrix();
         }
-        // World frame: R_w = R_w_room·R_room, wrist_w = T_w_room·wrist_room.
-        out[fi] = rigs_[static_cast<std::size_t>(s)]->pose(worldFromRoom_ * wristRoom, Mat3<Scalar>(worldFromRoom_.R * Rroom),
+        out[fi] = rigs_[static_cast<std::size_t>(s)]->pose(wristRoom, Rroom,
                                                             st.gesture, betas[s], ws);
       }
     }
@@ -497,14 +488,8 @@ class SynthSequence {
   // The state of frame i at its reference time + τ (capture.hpp): the camera from the continuous
   // path (the frame's own pose at τ = 0), the hands interpolated; vertices in subVerts_.
   void stateAt(int i, double tau, RigidPose<Scalar>& roomFromCam, std::vector<HandMeshView<Scalar>>& views) {
-    RigidPose<Scalar> cw;
-    if (tau == 0) {
-      roomFromCam = roomFromCamera_[static_cast<std::size_t>(i)];
-      cw = worldFromCamera(i).inverse();
-    } else {
-      roomFromCam = path_.at(static_cast<double>(i) / opt_.fps + tau);
-      cw = (worldFromRoom_ * roomFromCam).inverse();
-    }
+    roomFromCam = tau == 0 ? worldFromCamera_[static_cast<std::size_t>(i)] : path_.at(static_cast<double>(i) / opt_.fps + tau);
+    const RigidPose<Scalar> cw = roomFromCam.inverse();
     views.clear();
     for (int s = 0; s < 2; ++s) {
       forward(*models_[static_cast<std::size_t>(s)], handPoseAt(s, i, tau), ws_, fwd_);
@@ -528,7 +513,7 @@ class SynthSequence {
       toCamera(fwd_.vertices, cw, subVerts_[static_cast<std::size_t>(s)]);
       views.push_back(handView(s, subVerts_[static_cast<std::size_t>(s)]));
     }
-    meterRenderer_->renderLinear(roomFromCamera_[fi], views, meterRgb_, meterGeo_);
+    meterRenderer_->renderLinear(worldFromCamera_[fi], views, meterRgb_, meterGeo_);
   }
 
   // Image motion (pixels) of frame i between τ = −h and +h (capture.hpp: adaptive sub-frames):
@@ -543,7 +528,7 @@ class SynthSequence {
       const double tau = e == 0 ? -h : h;
       RigidPose<Scalar>& P = e == 0 ? a : b;
       P = path_.at(static_cast<double>(i) / opt_.fps + tau);
-      const RigidPose<Scalar> cw = (worldFromRoom_ * P).inverse();
+      const RigidPose<Scalar> cw = P.inverse();
       for (int s = 0; s < 2; ++s) {
         forward(*models_[static_cast<std::size_t>(s)], handPoseAt(s, i, tau), ws_, fwd_);
         toCamera(fwd_.keypoints, cw, e == 0 ? ka[s] : kb[s]);
@@ -561,7 +546,7 @@ class SynthSequence {
     }
     renderSmall(i);
     const PinholeCamera<Scalar>& m = meterRenderer_->camera();
-    const RigidPose<Scalar>& c0 = roomFromCamera_[static_cast<std::size_t>(i)];
+    const RigidPose<Scalar>& c0 = worldFromCamera_[static_cast<std::size_t>(i)];
     const RigidPose<Scalar> ai = a.inverse(), bi = b.inverse();
     flow_.clear();
     for (int y = 0; y < m.height; ++y) {
@@ -595,8 +580,7 @@ class SynthSequence {
   std::shared_ptr<const IndoorScene<Scalar>> scene_;
   std::shared_ptr<const HandModel<Scalar>> models_[2];
   std::shared_ptr<const HandRig<Scalar>> rigs_[2];
-  std::vector<RigidPose<Scalar>> roomFromCamera_;
-  RigidPose<Scalar> worldFromRoom_;
+  std::vector<RigidPose<Scalar>> worldFromCamera_;
   std::vector<HandPose<Scalar>> poses_[2];
   Vec3<Scalar> root_[2];  ///< J_0(β) per hand
   // Scratch of renderFrame().

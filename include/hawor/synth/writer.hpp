@@ -23,12 +23,11 @@
 //   DIR/capture.json         with capture effects only: the settings (capture.hpp), the encoding
 //                            a benchmark should apply (ffmpeg arguments for this size), and per
 //                            frame the sub-frames, the exposure gain and the white balance
-//   DIR/meta.json            preset, seed, sizes, mask labels, gravity in the world frame, the
-//                            first camera's height above the floor (metres), the
-//                            capture profile (with capture effects), and the caller's extra
+//   DIR/meta.json            preset, seed, sizes, mask labels, the world frame and gravity in it,
+//                            the capture profile (with capture effects), and the caller's extra
 //                            string fields (e.g. the hand-model files)
 // The clean capture (CaptureOptions::isClean) writes neither the lens line nor capture.json.
-// The world frame is the first camera's frame (sequence.hpp). Folders are created as needed;
+// The world frame is the room's: z up, the floor at z = 0 (sequence.hpp). Folders are created as needed;
 // existing files of the same names are replaced. Deterministic: the same sequence writes the
 // same bytes.
 // Thread-safety: one call per sequence at a time (it renders with the sequence's buffers).
@@ -285,12 +284,10 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
   m += "  \"frames\": " + std::to_string(T) + ",\n";
   m += "  \"fps\": " + detail::formatShortest(seq.fps(), false) + ",\n";
   m += "  \"width\": " + std::to_string(cam.width) + ",\n  \"height\": " + std::to_string(cam.height) + ",\n";
-  m += "  \"world_frame\": \"camera frame of frame 0 (OpenCV axes), metres\",\n";
+  m += "  \"world_frame\": \"the room: z up, floor at z = 0, metres\",\n";
   m += "  \"gravity_world\": [" + detail::formatShortest(static_cast<double>(g.x()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.y()), false) + ", " +
        detail::formatShortest(static_cast<double>(g.z()), false) + "],\n";
-  // the room's floor is at z = 0 (scene.hpp): the first camera's height above it
-  m += "  \"first_camera_height\": " + detail::formatShortest(static_cast<double>(seq.roomFromCamera(0).t(2)), false) + ",\n";
   if (!co.isClean()) m += "  \"capture\": " + jsonQuote(co.profile) + ",\n";
   m += "  \"mask_labels\": {\"left\": " + std::to_string(int(SynthSequence<Scalar>::kLeftLabel)) +
        ", \"right\": " + std::to_string(int(SynthSequence<Scalar>::kRightLabel)) + "},\n";
