@@ -3,12 +3,11 @@
 
 Each preset x seed is rendered by `hawor synth` and its ground-truth camera-frame hands
 (hands_gt.npz) are fed with the frames through `hawor world` (the pipeline without perception:
-masks, SLAM, metric scale, the gravity-aligned world, infilling). The room is z up with the floor
-at z = 0; meta.json gives gravity in the generator's world (the first camera's frame) and the
-first camera's height, which put the ground truth in a z-up frame up to a rotation about z. The
-estimate is then aligned by 4 degrees of freedom only (a yaw and a translation, fitted on the
-camera centres, least squares): no scale and no tilt, so gravity and the metric scale must come
-from the method.
+masks, SLAM, metric scale, the gravity-aligned world, infilling). The ground truth is in the
+room's frame (z up, the floor at z = 0), the output's convention up to a rotation about z and
+the placement of the origin. The estimate is aligned by 4 degrees of freedom only (a yaw and a
+translation, fitted on the camera centres, least squares): no scale and no tilt, so gravity and
+the metric scale must come from the method.
 
 Per run: where up came from (floor / camera) and the worst angle between the estimated and true
 up over the frames (each in the camera's frame: independent of the alignment); the first
@@ -17,8 +16,14 @@ the first camera) and true; the camera's position error after the 4-DoF alignmen
 path) and the wrists' (median over observed hand-frames, cm); the metric scale's cue. One table;
 --json writes the rows.
 
+--input joints feeds the ground truth's camera-frame 3D joints (joints_cam) instead of its MANO
+parameters (the model is then fitted to them). --hand-noise MM jitters the given hands as a
+regressor's error would, per frame and hand: the whole hand moved by N(0, MM) across the view and
+N(0, 3·MM) in depth, and with joints each joint by N(0, MM/2) more (seeded, reproducible).
+
   bench_world.py [--presets walk,table_work,hands_cover,fast_turns] [--seeds 1-2] [--frames 150]
-      [--size 640x480] [--hawor build/native/examples/hawor] [--work DIR] [--jobs 2] [--json F]
+      [--size 640x480] [--input params|joints] [--hand-noise MM] [--hawor build/native/examples/hawor]
+      [--work DIR] [--jobs 2] [--json F]
 """
 import argparse
 import json
@@ -46,14 +51,6 @@ def quat_to_R(q):
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-def z_up_basis(up):
-    """Rows: a horizontal x, y and up (a rotation taking the generator's world to a z-up one)."""
-    a = np.array([1.0, 0, 0]) if abs(up[0]) < 0.9 else np.array([0, 1.0, 0])
-    x = a - up * up.dot(a)
-    x /= np.linalg.norm(x)
-    return np.stack([x, np.cross(up, x), up])
-
-
 def fit_yaw_translation(src, dst):
     """Yaw about z and a translation taking src (N,3) onto dst (N,3), least squares."""
     ms, md = src.mean(0), dst.mean(0)
@@ -63,27 +60,45 @@ def fit_yaw_translation(src, dst):
     return R, md - R @ ms
 
 
+def noisy_hands(src, dst, mm, seed, joints):
+    """hands_gt.npz with the given hands jittered (see the module's doc), written to dst."""
+    z = dict(np.load(src))
+    rng = np.random.default_rng(seed)
+    sigma = np.array([1.0, 1.0, 3.0]) * mm / 1000
+    for side in ("left", "right"):
+        T = z[side + "_valid"].shape[0]
+        move = rng.normal(size=(T, 3)) * sigma
+        if joints:
+            z[side + "_joints_cam"] = z[side + "_joints_cam"] + move[:, None, :] + rng.normal(size=(T, 21, 3)) * mm / 2000
+            for k in ("cam_rot", "cam_trans", "hand_pose", "betas"):
+                z.pop(side + "_" + k, None)
+        else:
+            z[side + "_cam_trans"] = z[side + "_cam_trans"] + move
+    np.savez(dst, **z)
+
+
 def run_one(o, preset, seed):
     d = os.path.join(o.work, "%s_s%d" % (preset, seed))
     if not os.path.exists(os.path.join(d, "meta.json")):
         subprocess.run([o.hawor, "synth", "--preset", preset, "--seed", str(seed), "--frames", str(o.frames), "--size", o.size, "--out", d],
                        check=True, stdout=subprocess.DEVNULL)
     fx, fy, cx, cy = open(os.path.join(d, "intrinsics.txt")).read().split()[:4]
-    out = os.path.join(d, "world")
+    out = os.path.join(d, "world_%s_%g" % (o.input, o.hand_noise))
+    hands = os.path.join(d, "hands_gt.npz")
+    if o.hand_noise > 0:
+        hands = os.path.join(d, "hands_noisy_%s_%g.npz" % (o.input, o.hand_noise))
+        noisy_hands(os.path.join(d, "hands_gt.npz"), hands, o.hand_noise, seed, o.input == "joints")
     env = dict(os.environ, HAWOR_HAND_DIR=os.environ.get("HAWOR_HAND_DIR", os.path.join(os.path.dirname(os.path.dirname(o.hawor)), "models")))
-    r = subprocess.run([o.hawor, "world", "--images", os.path.join(d, "rgb"), "--hands", os.path.join(d, "hands_gt.npz"),
+    r = subprocess.run([o.hawor, "world", "--images", os.path.join(d, "rgb"), "--hands", hands, "--hands-input", o.input,
                         "--intrinsics", ",".join([fx, fy, cx, cy]), "--out", out], capture_output=True, text=True, env=env)
     if r.returncode != 0:
         return {"preset": preset, "seed": seed, "error": r.stderr.strip().splitlines()[-1]}
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     meta = json.load(open(os.path.join(d, "meta.json")))
-    up = -np.array(meta["gravity_world"], float)
-    up /= np.linalg.norm(up)
-    B = z_up_basis(up)
-    h0 = float(meta["first_camera_height"])
-    gp, gq = read_tum(os.path.join(d, "camera_gt.tum"))
+    up = -np.array(meta["gravity_world"], float)  # (0, 0, 1): the room is z up, floor at z = 0
+    gt, gq = read_tum(os.path.join(d, "camera_gt.tum"))
     ep, eq = read_tum(os.path.join(out, "camera.tum"))
-    gt = (B @ gp.T).T + np.array([0, 0, h0])  # z-up, floor at 0, up to a yaw
+    h0 = float(gt[0, 2])
     # up in each camera's frame: estimated (z of the output world) against true
     worst = 0.0
     for t in range(len(gq)):
@@ -100,7 +115,7 @@ def run_one(o, preset, seed):
         v = gh[side + "_valid"].astype(bool) & eh[side + "_valid"].astype(bool)
         if not v.any():
             continue
-        g = (B @ gh[side + "_joints_world"][v, 0, :].T).T + np.array([0, 0, h0])
+        g = gh[side + "_joints_world"][v, 0, :]
         e = (R @ eh[side + "_joints_world"][v, 0, :].T).T + t
         werr += list(np.linalg.norm(e - g, axis=1))
     return {"preset": preset, "seed": seed, "up": summary["up"], "up_confidence": summary["up_confidence"], "up_err_deg": worst,
@@ -116,6 +131,8 @@ def main():
     ap.add_argument("--seeds", default="1-2")
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--size", default="640x480")
+    ap.add_argument("--input", choices=("params", "joints"), default="params")
+    ap.add_argument("--hand-noise", type=float, default=0.0, metavar="MM")
     ap.add_argument("--hawor", default=os.path.join(ROOT, "build", "native", "examples", "hawor"))
     ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "hawor_bench_world"))
     ap.add_argument("--jobs", type=int, default=2)

@@ -134,6 +134,12 @@ class JsonObject {
     items_.push_back(quote(k) + ": " + quote(v));
     return *this;
   }
+  JsonObject& strings(const std::string& k, const std::vector<std::string>& v) {
+    std::string s = "[";
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + quote(v[i]);
+    items_.push_back(quote(k) + ": " + s + "]");
+    return *this;
+  }
   JsonObject& raw(const std::string& k, const std::string& json) {
     items_.push_back(quote(k) + ": " + json);
     return *this;

@@ -137,6 +137,18 @@ struct HandParams {
     return t;
   }
 
+  /// Whether every value of frame t is finite.
+  bool finiteAt(size_t t) const {
+    for (const ParamArray* a : {&orient, &pose, &betas, &transl}) {
+      if (!a->present()) continue;
+      const double* v = a->at(t);
+      for (size_t i = 0; i < a->perFrame; ++i) {
+        if (!std::isfinite(v[i])) return false;
+      }
+    }
+    return true;
+  }
+
   /// The parameters of frame t; throws naming the file, key and frame for non-finite values.
   hawor::HandPose<double> at(size_t t, const hawor::HandModel<double>& m) const {
     hawor::HandPose<double> p = hawor::HandPose<double>::zero(m);
@@ -173,26 +185,28 @@ struct HandParams {
 };
 
 /// Reads the hand parameters of `z` (see HandParams) with the given key names for the global
-/// orientation and the translation; checks shapes against the model and the frame counts.
+/// orientation and the translation, and `prefix` before hand_pose and betas (a two-hand file's
+/// "left_" / "right_"); checks shapes against the model and the frame counts.
 inline HandParams readHandParams(const hawor::Npz& z, const hawor::HandModel<double>& m,
                                  const std::vector<std::string>& orientKeys,
-                                 const std::vector<std::string>& translKeys) {
+                                 const std::vector<std::string>& translKeys, const std::string& prefix = "") {
+  const std::string poseKey = prefix + "hand_pose", betasKey = prefix + "betas";
   const size_t J1 = static_cast<size_t>(m.numJoints() - 1), B = static_cast<size_t>(m.numBetas());
   HandParams h;
   h.source = z.source();
   h.orient = readParamArray(z, orientKeys, {{3}}, "(3) or (T,3)");
-  h.pose = readParamArray(z, {"hand_pose"}, {{J1 * 3}, {J1, 3}},
+  h.pose = readParamArray(z, {poseKey}, {{J1 * 3}, {J1, 3}},
                           "(" + std::to_string(J1 * 3) + "), (" + std::to_string(J1) + ",3) or with a leading T axis "
                           "(the model has " + std::to_string(J1 + 1) + " joints)");
   h.transl = readParamArray(z, translKeys, {{3}}, "(3) or (T,3)");
-  if (z.has("betas")) {
-    const std::vector<size_t>& s = z.get("betas").shape;
+  if (z.has(betasKey)) {
+    const std::vector<size_t>& s = z.get(betasKey).shape;
     const size_t b = s.empty() ? 0 : s.back();
     if (b > B) {
-      throw hawor::Error(z.source() + ": 'betas' has shape " + hawor::shapeString(s) + ": " + std::to_string(b) +
+      throw hawor::Error(z.source() + ": '" + betasKey + "' has shape " + hawor::shapeString(s) + ": " + std::to_string(b) +
                          " shape coefficients, the model has " + std::to_string(B));
     }
-    h.betas = readParamArray(z, {"betas"}, {{b}}, "(B) or (T,B) with B <= " + std::to_string(B));
+    h.betas = readParamArray(z, {betasKey}, {{b}}, "(B) or (T,B) with B <= " + std::to_string(B));
   }
   size_t T = 0;
   std::string first;
@@ -208,19 +222,19 @@ inline HandParams readHandParams(const hawor::Npz& z, const hawor::HandModel<dou
   return h;
 }
 
-/// Optional (T,) validity of an npz, 0/1 (bool, integer or float); all valid when absent.
-inline std::vector<uint8_t> readValidFlags(const hawor::Npz& z, size_t frames) {
-  if (!z.has("valid")) return std::vector<uint8_t>(frames, 1);
-  const hawor::NpyArray& a = z.get("valid");
+/// Optional (T,) validity `key` of an npz, 0/1 (bool, integer or float); all valid when absent.
+inline std::vector<uint8_t> readValidFlags(const hawor::Npz& z, size_t frames, const std::string& key = "valid") {
+  if (!z.has(key)) return std::vector<uint8_t>(frames, 1);
+  const hawor::NpyArray& a = z.get(key);
   if (a.shape.size() != 1 || a.shape[0] != frames) {
-    throw hawor::Error(z.source() + ": 'valid' must have shape (" + std::to_string(frames) + ",), got " +
+    throw hawor::Error(z.source() + ": '" + key + "' must have shape (" + std::to_string(frames) + ",), got " +
                        hawor::shapeString(a.shape));
   }
-  const std::vector<double> v = z.getAs<double>("valid");
+  const std::vector<double> v = z.getAs<double>(key);
   std::vector<uint8_t> out(frames);
   for (size_t i = 0; i < frames; ++i) {
     if (v[i] != 0 && v[i] != 1) {
-      throw hawor::Error(z.source() + ": 'valid' must hold 0/1, frame " + std::to_string(i) + " holds " +
+      throw hawor::Error(z.source() + ": '" + key + "' must hold 0/1, frame " + std::to_string(i) + " holds " +
                          std::to_string(v[i]));
     }
     out[i] = v[i] != 0;

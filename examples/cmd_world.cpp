@@ -27,20 +27,27 @@ namespace hawor_cli {
 namespace {
 
 const char* kWorldHelp =
-    "usage: hawor world --images DIR --hands HANDS.npz --out DIR [--intrinsics fx,fy,cx,cy | --fov DEG]\n"
+    "usage: hawor world --images DIR --hands HANDS.npz [--hands-input auto|params|joints] --out DIR\n"
+    "                   [--intrinsics fx,fy,cx,cy | --fov DEG]\n"
     "                   [--camera LENS] [--fps F] [--readout S] [--mano DIR] [--no-refine-focal]\n"
     "                   [--eye-height M] [--no-ground] [--infill spline|lerp|last] [--set NAME=VALUE,...]\n"
     "\n"
     "Camera-frame hands to a metric world: hand masks, masked SLAM, metric scale, camera -> world,\n"
     "infilling (docs/pipeline.md). The hands come from any regressor, in HANDS.npz per side\n"
     "(prefix left_ / right_; a side without keys was never seen; docs/pipeline.md#hands-file):\n"
-    "  <side>cam_rot (T,3)     axis-angle of the wrist, camera frame (x right, y down, z forward)\n"
-    "  <side>cam_trans (T,3)   the model's translation, camera frame, metres\n"
+    "MANO parameters:\n"
+    "  <side>cam_rot (T,3)     axis-angle of the wrist, camera frame (x right, y down, z forward);\n"
+    "                          or <side>global_orient\n"
+    "  <side>cam_trans (T,3)   the model's translation, camera frame, metres; or <side>transl\n"
     "  <side>hand_pose (T,3K) or (T,K,3)   joint axis-angles (MANO: K = 15)\n"
     "  <side>betas (T,B) or (B,)           shape (optional: zeros)\n"
+    "or 3D joints (the model is fitted to them and kept at their depth):\n"
+    "  <side>joints_cam (T,21,3)  camera frame, metres, MediaPipe / OpenPose order\n"
+    "and for both:\n"
     "  <side>valid (T,)        frames where the hand was seen (optional: frames with finite values)\n"
     "  image_size (2,)         width, height the hands were estimated on (optional, checked)\n"
-    "`hawor synth`'s hands_gt.npz has this layout.\n"
+    "--hands-input auto (default) takes the parameters when the file has them, else the joints.\n"
+    "`hawor synth`'s hands_gt.npz has both.\n"
     "\n"
     "  --images DIR          the video's frames (.png/.jpg/.bmp) in file-name order, one per hand row\n"
     "  --intrinsics fx,fy,cx,cy  the camera's; else --fov DEG (diagonal, default 90) through the lens\n"
@@ -63,87 +70,57 @@ const char* kWorldHelp =
 
 const char* const kSides[2] = {"left", "right"};
 
-/// One side's camera-frame hands from the file (empty when the side has no keys).
+/// One side's camera-frame hands from the file: MANO parameters or 3D joints (none: never seen).
 struct GivenHand {
-  bool present = false;
-  std::vector<hawor::HandPose<double>> poses;  ///< per frame
+  std::vector<hawor::HandPose<double>> poses;  ///< per frame, with parameters
+  hawor::Points3<double> joints;               ///< (21·T, 3), with joints
   std::vector<char> valid;
+  bool present() const { return !valid.empty(); }
 };
 
-std::vector<double> rowsOf(const hawor::Npz& z, const std::string& key, size_t T, size_t& cols) {
-  const hawor::NpyArray& a = z.get(key);
-  size_t c = 0;
-  if (a.shape.size() == 2 && a.shape[0] == T) {
-    c = a.shape[1];
-  } else if (a.shape.size() == 3 && a.shape[0] == T && a.shape[2] == 3) {
-    c = 3 * a.shape[1];
-  } else if (a.shape.size() == 1 && key.size() > 5 && key.compare(key.size() - 5, 5, "betas") == 0) {
-    c = a.shape[0];  // one shape for every frame
-    std::vector<double> v = z.getAs<double>(key), out;
-    for (size_t t = 0; t < T; ++t) out.insert(out.end(), v.begin(), v.end());
-    cols = c;
-    return out;
-  } else {
-    throw hawor::Error(z.source() + ": '" + key + "' has shape " + hawor::shapeString(a.shape) + ", expected (" + std::to_string(T) + ", ...)");
-  }
-  if (cols != 0 && c != cols) {
-    throw hawor::Error(z.source() + ": '" + key + "' has " + std::to_string(c) + " columns, expected " + std::to_string(cols));
-  }
-  cols = c;
-  return z.getAs<double>(key);
-}
+enum class HandsInput { Auto, Params, Joints };
 
-GivenHand readGivenHand(const hawor::Npz& z, const std::string& side, size_t T, const hawor::HandModel<double>& model) {
+/// Side s's parameters (`<side>cam_rot` or `<side>global_orient`, `<side>cam_trans` or
+/// `<side>transl`, `<side>hand_pose`, `<side>betas`) or joints (`<side>joints_cam`, (T,21,3)),
+/// `<side>valid` when given, else the frames whose values are finite.
+GivenHand readGivenHand(const hawor::Npz& z, const std::string& side, size_t T, const hawor::HandModel<double>& model, bool joints) {
   const std::string p = side + "_";
   GivenHand h;
-  const bool any = z.has(p + "cam_rot") || z.has(p + "cam_trans") || z.has(p + "hand_pose");
-  if (!any) return h;
-  for (const char* k : {"cam_rot", "cam_trans", "hand_pose"}) {
-    if (!z.has(p + k)) throw hawor::Error(z.source() + ": the " + side + " hand lacks '" + p + k + "' (a hand needs cam_rot, cam_trans and hand_pose)");
-  }
-  h.present = true;
-  size_t c3 = 3, cp = static_cast<size_t>(3 * (model.numJoints() - 1)), cb = 0;
-  const std::vector<double> rot = rowsOf(z, p + "cam_rot", T, c3);
-  c3 = 3;
-  const std::vector<double> trans = rowsOf(z, p + "cam_trans", T, c3);
-  const std::vector<double> pose = rowsOf(z, p + "hand_pose", T, cp);
-  std::vector<double> betas;
-  if (z.has(p + "betas")) betas = rowsOf(z, p + "betas", T, cb);
-  if (cb > static_cast<size_t>(model.numBetas())) {
-    throw hawor::Error(z.source() + ": '" + p + "betas' has " + std::to_string(cb) + " coefficients, the model has " + std::to_string(model.numBetas()));
-  }
-  std::vector<double> valid(T, -1);
-  if (z.has(p + "valid")) {
-    const hawor::NpyArray& va = z.get(p + "valid");
-    if (va.shape.size() != 1 || va.shape[0] != T) {
-      throw hawor::Error(z.source() + ": '" + p + "valid' has shape " + hawor::shapeString(va.shape) + ", expected (" + std::to_string(T) + ",)");
+  const bool given = z.has(p + "valid");
+  if (joints) {
+    const std::string key = p + "joints_cam";
+    if (!z.has(key)) return h;
+    const hawor::NpyArray& a = z.get(key);
+    if (a.shape != std::vector<size_t>{T, 21, 3}) {
+      throw hawor::Error(z.source() + ": '" + key + "' has shape " + hawor::shapeString(a.shape) + ", expected (" + std::to_string(T) + ", 21, 3)");
     }
-    valid = z.getAs<double>(p + "valid");
+    const std::vector<double> v = z.getAs<double>(key);
+    h.joints = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), static_cast<Eigen::Index>(21 * T), 3);
+    h.valid.assign(T, 1);
+    const std::vector<uint8_t> flags = readValidFlags(z, T, p + "valid");
+    for (size_t t = 0; t < T; ++t) {
+      const bool finite = h.joints.middleRows(static_cast<Eigen::Index>(21 * t), 21).allFinite();
+      if (given && flags[t] && !finite) throw hawor::Error(z.source() + ": '" + key + "' holds a non-finite value at frame " + std::to_string(t) + ", marked valid");
+      h.valid[t] = given ? flags[t] : finite;
+    }
+    return h;
   }
+  const HandParams hp = readHandParams(z, model, {p + "cam_rot", p + "global_orient"}, {p + "cam_trans", p + "transl"}, p);
+  if (!hp.orient.present() && !hp.transl.present() && !hp.pose.present()) return h;
+  for (const ParamArray* a : {&hp.orient, &hp.transl, &hp.pose}) {
+    if (!a->present()) {
+      const std::string k = a == &hp.orient ? "cam_rot" : a == &hp.transl ? "cam_trans" : "hand_pose";
+      throw hawor::Error(z.source() + ": the " + side + " hand lacks '" + p + k + "' (a hand needs cam_rot, cam_trans and hand_pose)");
+    }
+  }
+  const std::vector<uint8_t> flags = readValidFlags(z, T, p + "valid");
   h.poses.resize(T);
   h.valid.assign(T, 0);
   for (size_t t = 0; t < T; ++t) {
-    hawor::HandPose<double> q = hawor::HandPose<double>::zero(model);
-    q.globalOrient = hawor::Vec3<double>(rot[3 * t], rot[3 * t + 1], rot[3 * t + 2]);
-    q.transl = hawor::Vec3<double>(trans[3 * t], trans[3 * t + 1], trans[3 * t + 2]);
-    std::copy(pose.begin() + static_cast<std::ptrdiff_t>(cp * t), pose.begin() + static_cast<std::ptrdiff_t>(cp * (t + 1)), q.jointPose.data());
-    for (size_t b = 0; b < cb; ++b) q.betas(static_cast<Eigen::Index>(b)) = betas[cb * t + b];
-    const bool finite = q.globalOrient.allFinite() && q.transl.allFinite() && q.jointPose.allFinite() && q.betas.allFinite();
-    if (valid[t] == -1) {
-      h.valid[t] = finite ? 1 : 0;
-    } else if (valid[t] != 0) {
-      if (!finite) throw hawor::Error(z.source() + ": the " + side + " hand is marked valid at frame " + std::to_string(t) + " but its parameters are not finite");
-      h.valid[t] = 1;
-    }
-    h.poses[t] = std::move(q);
+    h.valid[t] = given ? flags[t] : hp.finiteAt(t);
+    if (h.valid[t]) h.poses[t] = hp.at(t, model);  // throws naming the key and frame when not finite
   }
   return h;
-}
-
-std::string jsonQuoteList(const std::vector<std::string>& v) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + hawor::jsonQuote(v[i]);
-  return s + "]";
 }
 
 void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>& r) {
@@ -174,7 +151,7 @@ void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>&
 
 int cmdWorld(int argc, char** argv) {
   const Args args(argc, argv, 2,
-                  {"images", "hands", "out", "intrinsics", "fov", "camera", "fps", "readout", "mano", "eye-height", "infill", "set"},
+                  {"images", "hands", "hands-input", "out", "intrinsics", "fov", "camera", "fps", "readout", "mano", "eye-height", "infill", "set"},
                   {"no-refine-focal", "no-ground", "first-camera-world"});
   if (args.help()) {
     std::fputs(kWorldHelp, stdout);
@@ -182,6 +159,9 @@ int cmdWorld(int argc, char** argv) {
   }
   const std::string dir = args.required("images"), handsPath = args.required("hands"), out = args.required("out");
   if (args.has("intrinsics") && args.has("fov")) throw UsageError("give --intrinsics or --fov, not both");
+  const std::string inputName = args.get("hands-input", "auto");
+  if (inputName != "auto" && inputName != "params" && inputName != "joints") throw UsageError("--hands-input must be auto, params or joints");
+  const HandsInput input = inputName == "params" ? HandsInput::Params : inputName == "joints" ? HandsInput::Joints : HandsInput::Auto;
   const std::vector<std::string> names = hawor::listImageFiles(dir);
   if (names.empty()) throw hawor::Error("--images " + dir + ": no images (.png/.jpg/.bmp)");
   hawor::ImageU8 first = hawor::readImage(dir + "/" + names[0]);
@@ -232,7 +212,6 @@ int cmdWorld(int argc, char** argv) {
                          std::to_string(first.height) + " ones in " + dir);
     }
   }
-  GivenHand hands[2];
   for (int s = 0; s < 2; ++s) {
     for (const std::string& k : z.names()) {
       const std::string p = std::string(kSides[s]) + "_";
@@ -240,17 +219,37 @@ int cmdWorld(int argc, char** argv) {
         throw hawor::Error(handsPath + ": '" + k + "' has " + std::to_string(z.get(k).shape[0]) + " frames, " + dir + " has " + std::to_string(T) + " images");
       }
     }
-    hands[s] = readGivenHand(z, kSides[s], T, models[s].model);
   }
-  if (!hands[0].present && !hands[1].present) throw hawor::Error(handsPath + ": no hand (no left_cam_rot / right_cam_rot ...; see hawor world --help)");
+  GivenHand hands[2];
+  bool joints = input == HandsInput::Joints;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int s = 0; s < 2; ++s) hands[s] = readGivenHand(z, kSides[s], T, models[s].model, joints);
+    if (hands[0].present() || hands[1].present() || input != HandsInput::Auto || joints) break;
+    joints = true;  // auto: parameters when the file has them, else joints
+  }
+  if (!hands[0].present() && !hands[1].present()) {
+    throw hawor::Error(handsPath + (joints ? ": no hand joints (no left_joints_cam / right_joints_cam; see hawor world --help)"
+                                           : ": no hand (no left_cam_rot / right_cam_rot ...; see hawor world --help)"));
+  }
   hawor::Pipeline<double> p(po, models[0].model, models[1].model);
   for (size_t t = 0; t < T; ++t) {
     const hawor::ImageU8 img = t == 0 ? std::move(first) : hawor::readImage(dir + "/" + names[t]);
-    std::array<const hawor::HandPose<double>*, 2> given{nullptr, nullptr};
-    for (int s = 0; s < 2; ++s) {
-      if (hands[s].present && hands[s].valid[t]) given[static_cast<std::size_t>(s)] = &hands[s].poses[t];
+    if (joints) {
+      hawor::Points3<double> X[2];
+      std::array<const hawor::Points3<double>*, 2> given{nullptr, nullptr};
+      for (int s = 0; s < 2; ++s) {
+        if (!hands[s].present() || !hands[s].valid[t]) continue;
+        X[s] = hands[s].joints.middleRows(static_cast<Eigen::Index>(21 * t), 21);
+        given[static_cast<std::size_t>(s)] = &X[s];
+      }
+      p.pushJoints(img, given);
+    } else {
+      std::array<const hawor::HandPose<double>*, 2> given{nullptr, nullptr};
+      for (int s = 0; s < 2; ++s) {
+        if (hands[s].present() && hands[s].valid[t]) given[static_cast<std::size_t>(s)] = &hands[s].poses[t];
+      }
+      p.pushHands(img, given);
     }
-    p.pushHands(img, given);
   }
   const hawor::PipelineResult<double> r = p.finish();
   if (::mkdir(out.c_str(), 0755) != 0 && errno != EEXIST) throw hawor::Error("--out " + out + ": " + std::strerror(errno));
@@ -267,6 +266,11 @@ int cmdWorld(int argc, char** argv) {
       .num("scale", r.scale)
       .str("method", r.scaleMethod)
       .num("confidence", r.scaleConfidence)
+      .str("hand_cue", r.scaleCues.handsRan ? r.scaleCues.hands.method : std::string("none"))
+      .num("hand_scale", r.scaleCues.handsRan ? r.scaleCues.hands.scale : NAN)
+      .num("hand_confidence", r.scaleCues.handsRan ? r.scaleCues.hands.confidence : 0.0)
+      .num("ground_scale", r.scaleCues.groundRan && r.scaleCues.ground.ok() ? r.scaleCues.groundUsed : NAN)
+      .num("ground_confidence", r.scaleCues.groundRan && r.scaleCues.ground.ok() ? r.scaleCues.ground.confidence : 0.0)
       .str("world", r.world.up == "none" ? "first-camera" : "z-up")
       .str("up", r.world.up)
       .num("up_confidence", r.world.upConfidence)
@@ -280,7 +284,7 @@ int cmdWorld(int argc, char** argv) {
       .integer("lost_frames", r.slam.count(hawor::SlamStatus::Lost))
       .integer("left_valid", std::count(r.hands[0].valid.begin(), r.hands[0].valid.end(), 1))
       .integer("right_valid", std::count(r.hands[1].valid.begin(), r.hands[1].valid.end(), 1))
-      .raw("warnings", jsonQuoteList(r.warnings))
+      .strings("warnings", r.warnings)
       .str("out", out);
   std::printf("%s\n", j.dump().c_str());
   return 0;

@@ -12,6 +12,8 @@
 //       -> {slamStatus, detection: Int32Array(2) (index per side, -1 none), valid: Uint8Array(2)}
 //     .pushHands(frame, {left: pose | null, right: pose | null}) -> the same (camera-frame hands
 //       from another regressor; pose objects as HandModel.forward takes)
+//     .pushJoints(frame, {left: joints (63) | null, right: ...}) -> the same (camera-frame 3D
+//       joints from another regressor, metres, 21 in MediaPipe order; the model fitted to them)
 //     .finishCamera() -> {keyframeFrames: Int32Array, initialised}
 //     .finish(depthMaps: [Float32Array (SLAM width*height)] | null) -> the result (run.mjs's
 //       header: intrinsics' focal fields, slam, world, camera, points, scale, hands, noHands, warnings,
@@ -250,6 +252,22 @@ class Pipeline {
     });
   }
 
+  val pushJoints(const val& frame, const val& joints) {
+    return guard("Pipeline.pushJoints", [&] {
+      const hawor::ImageU8 im = frameFrom(frame, p_);
+      hawor::Points3<double> X[2];
+      std::array<const hawor::Points3<double>*, 2> given{nullptr, nullptr};
+      const char* names[2] = {"left", "right"};
+      for (int s = 0; s < 2; ++s) {
+        if (absent(joints) || absent(joints[names[s]])) continue;
+        const std::vector<double> v = exactly(joints[names[s]], 63, std::string("joints.") + names[s]);
+        X[s] = Eigen::Map<const hawor::Points3<double>>(v.data(), 21, 3);
+        given[s] = &X[s];
+      }
+      return info(p_.pushJoints(im, given));
+    });
+  }
+
   val finishCamera() {
     return guard("Pipeline.finishCamera", [&] {
       const hawor::SlamResult<double>& r = p_.finishCamera();
@@ -326,6 +344,7 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
       .function("slamSize", &Pipeline::slamSize)
       .function("push", &Pipeline::push)
       .function("pushHands", &Pipeline::pushHands)
+      .function("pushJoints", &Pipeline::pushJoints)
       .function("finishCamera", &Pipeline::finishCamera)
       .function("finish", &Pipeline::finish);
   emscripten::class_<SideAssigner>("SideAssigner").constructor<double>().function("assign", &SideAssigner::assign);

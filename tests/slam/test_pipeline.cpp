@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "hawor/geometry/alignment.hpp"
@@ -42,17 +43,20 @@ double median(std::vector<double> v) {
 
 struct Outcome {
   hawor::PipelineResult<double> result;
-  std::vector<V3> gtCam;                  // camera centres, the generator's world (the first camera's)
-  std::vector<hawor::Mat3<double>> roomR;  // camera-to-room rotations (the room: z up, floor at z = 0)
-  std::vector<double> roomZ;               // camera heights above the floor
+  std::vector<V3> gtCam;                   // camera centres (the room: z up, floor at z = 0)
+  std::vector<hawor::Mat3<double>> gtR;    // camera-to-room rotations
   std::vector<std::array<V3, 2>> gtWrist;  // world wrists (room frame), NaN where the hand is unseen
   std::vector<std::array<V3, 2>> gtWristCam;
   std::vector<std::array<bool, 2>> seen;
 };
 
+enum class Input { Hands, Detections, Joints };
+
 /// `frames` frames of a preset through the pipeline: the ground-truth camera-frame hands
-/// (pushHands) or their keypoints as detections (push: 2D projections, metric 3D keypoints).
-Outcome runPipeline(const std::string& preset, int frames, bool detections, std::uint64_t seed = 1, bool groundCue = true) {
+/// (pushHands), their keypoints as detections (push: 2D projections, metric 3D keypoints) or their
+/// camera-frame joints (pushJoints), the joints jittered per frame by N(0, noise) across the view
+/// and N(0, 3·noise) in depth (metres), as a regressor's would be.
+Outcome runPipeline(const std::string& preset, int frames, Input input, std::uint64_t seed = 1, bool groundCue = true, double noise = 0) {
   const hs::SynthOptions so = slam_test::sequenceOptions(frames);
   hs::SynthSequence<double> seq(hs::findSynthPreset(preset), seed, leftHand(), rightHand(), so);
   hawor::PipelineOptions<double> po;
@@ -63,14 +67,17 @@ Outcome runPipeline(const std::string& preset, int frames, bool detections, std:
   hawor::Pipeline<double> p(po, leftHand(), rightHand());
   Outcome o;
   hs::SynthFrame<double> fr;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0, 1);
+  hawor::Points3<double> joints[2];
   for (int i = 0; i < seq.numFrames(); ++i) {
     seq.renderFrame(i, fr);
     o.gtCam.push_back(fr.worldFromCamera.t);
-    o.roomR.push_back(seq.roomFromCamera(i).R);
-    o.roomZ.push_back(seq.roomFromCamera(i).t(2));
+    o.gtR.push_back(fr.worldFromCamera.R);
     std::array<V3, 2> w, wc;
     std::array<bool, 2> seen{};
     std::array<const hawor::HandPose<double>*, 2> given{nullptr, nullptr};
+    std::array<const hawor::Points3<double>*, 2> givenJoints{nullptr, nullptr};
     std::vector<hawor::HandDetection<double>> dets;
     for (int s = 0; s < 2; ++s) {
       const auto& h = fr.hands[s];
@@ -79,6 +86,9 @@ Outcome runPipeline(const std::string& preset, int frames, bool detections, std:
       wc[s] = h.jointsCam.row(0).transpose();
       if (!h.valid) continue;
       given[s] = &h.camera;
+      const V3 move(noise * normal(rng), noise * normal(rng), 3 * noise * normal(rng));
+      joints[s] = h.jointsCam.rowwise() + move.transpose();
+      givenJoints[s] = &joints[s];
       hawor::HandDetection<double> d;
       d.keypoints2d.resize(21, 2);
       for (int k = 0; k < 21; ++k) d.keypoints2d.row(k) = seq.camera().project(V3(h.jointsCam.row(k).transpose())).transpose();
@@ -89,8 +99,10 @@ Outcome runPipeline(const std::string& preset, int frames, bool detections, std:
     o.gtWrist.push_back(w);
     o.gtWristCam.push_back(wc);
     o.seen.push_back(seen);
-    if (detections) {
+    if (input == Input::Detections) {
       p.push(fr.images.rgb, dets);
+    } else if (input == Input::Joints) {
+      p.pushJoints(fr.images.rgb, givenJoints);
     } else {
       p.pushHands(fr.images.rgb, given);
     }
@@ -152,7 +164,7 @@ TEST_CASE("pipeline sides: track continuity, side memory over a short gap, two h
 }
 
 TEST_CASE("pipeline: camera-frame hands from another regressor to a metric world (table_work, 60 frames)", "[pipeline]") {
-  const Outcome o = runPipeline("table_work", 60, false);
+  const Outcome o = runPipeline("table_work", 60, Input::Hands);
   const hawor::PipelineResult<double>& r = o.result;
   REQUIRE(r.frames == 60);
   REQUIRE(r.slam.initialised);
@@ -190,21 +202,62 @@ TEST_CASE("pipeline: camera-frame hands from another regressor to a metric world
   CHECK(r.timings.count("slam") == 1);
 }
 
+TEST_CASE("pipeline: camera-frame 3D joints, exact and with a regressor's jitter, to a metric world (table_work, 60 frames)", "[pipeline]") {
+  for (const double noise : {0.0, 0.005}) {
+    const Outcome o = runPipeline("table_work", 60, Input::Joints, 1, true, noise);
+    const hawor::PipelineResult<double>& r = o.result;
+    REQUIRE(r.slam.initialised);
+    // no alignment of scale or tilt: the first cameras' up and height against the room's, and the
+    // wrists against the truth in each camera's frame (the fit kept at the joints' depth)
+    std::vector<double> errCam;
+    int seen = 0;
+    for (int s = 0; s < 2; ++s) {
+      for (std::size_t t = 0; t < o.seen.size(); ++t) {
+        if (!o.seen[t][s]) continue;
+        ++seen;
+        if (!r.hands[s].valid[t]) continue;
+        const auto& j = r.hands[s].jointsCam;
+        const Eigen::Index i = static_cast<Eigen::Index>(t);
+        errCam.push_back((V3(j(i, 0), j(i, 1), j(i, 2)) - o.gtWristCam[t][s]).norm());
+      }
+    }
+    const V3 up0 = r.cameraPoses[0].rotationMatrix().transpose() * V3::UnitZ(), gtUp0 = o.gtR[0].transpose() * V3::UnitZ();
+    const double upErr = std::acos(std::min(1.0, up0.dot(gtUp0))) * 180 / M_PI;
+    INFO("noise " << noise << ": " << errCam.size() << " of " << seen << " hand-frames; camera-frame wrist error median " << median(errCam)
+                  << " m; up error " << upErr << " deg; first camera at " << r.cameraPoses[0].translation()(2) << " m (truth " << o.gtCam[0](2)
+                  << "); scale " << r.scale << " (" << r.scaleMethod << ")");
+    REQUIRE(seen > 20);
+    CHECK(errCam.size() >= static_cast<std::size_t>(0.95 * seen));
+    CHECK(median(errCam) < (noise > 0 ? 0.02 : 0.005));
+    CHECK(r.world.up == "floor");
+    CHECK(upErr < 2.0);
+    CHECK(std::abs(r.cameraPoses[0].translation()(2) - o.gtCam[0](2)) < 0.1 * o.gtCam[0](2));
+  }
+  // bad joints are refused naming the side
+  hawor::PipelineOptions<double> po;
+  po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;
+  hawor::Pipeline<double> p(po, leftHand(), rightHand());
+  hawor::Points3<double> bad = hawor::Points3<double>::Constant(21, 3, 0.4);
+  bad(4, 2) = NAN;
+  CHECK_THROWS_WITH(p.pushJoints(hawor::ImageU8(640, 480, 3, 90), {nullptr, &bad}), Catch::Contains("the right hand: joints must be 21 finite 3D points"));
+  CHECK(p.frames() == 0);
+}
+
 TEST_CASE("pipeline: the output's world is gravity-aligned, z up, the origin on the floor (walk and table_work)", "[pipeline]") {
   for (const char* preset : {"walk", "table_work", "walk (no ground cue)"}) {
     const bool ground = std::string(preset).find("no ground") == std::string::npos;
-    const Outcome o = runPipeline(ground ? preset : "walk", 60, false, 1, ground);
+    const Outcome o = runPipeline(ground ? preset : "walk", 60, Input::Hands, 1, ground);
     const hawor::PipelineResult<double>& r = o.result;
     // up in each camera's frame, estimated against the room's (independent of yaw and origin)
     double worst = 0;
-    for (std::size_t t = 0; t < o.roomR.size(); ++t) {
+    for (std::size_t t = 0; t < o.gtR.size(); ++t) {
       const V3 est = r.cameraPoses[t].rotationMatrix().transpose() * V3::UnitZ();
-      const V3 gt = o.roomR[t].transpose() * V3::UnitZ();
+      const V3 gt = o.gtR[t].transpose() * V3::UnitZ();
       worst = std::max(worst, std::acos(std::min(1.0, est.dot(gt))) * 180 / M_PI);
     }
     INFO(preset << ": up from " << r.world.up << " (confidence " << r.world.upConfidence << "), origin on the floor " << r.world.originOnFloor
                 << ", worst up error " << worst << " deg; first camera at height " << r.cameraPoses[0].translation()(2) << " m (truth "
-                << o.roomZ[0] << ")");
+                << o.gtCam[0](2) << ")");
     CHECK(r.world.up == (ground ? "floor" : "camera"));
     CHECK(worst < (ground ? 2.0 : 5.0));
     // the first camera looks along +y, horizontally
@@ -215,7 +268,7 @@ TEST_CASE("pipeline: the output's world is gravity-aligned, z up, the origin on 
     CHECK(std::abs(c0(0)) < 1e-9);
     CHECK(std::abs(c0(1)) < 1e-9);
     if (r.world.originOnFloor) {
-      CHECK(std::abs(c0(2) - o.roomZ[0]) < 0.15 * o.roomZ[0]);  // the metric scale's error, nothing more
+      CHECK(std::abs(c0(2) - o.gtCam[0](2)) < 0.15 * o.gtCam[0](2));  // the metric scale's error, nothing more
     } else {
       CHECK(std::abs(c0(2)) < 1e-9);
     }
@@ -232,7 +285,7 @@ TEST_CASE("pipeline: the output's world is gravity-aligned, z up, the origin on 
 }
 
 TEST_CASE("pipeline: detections fitted, sides kept, masks for the SLAM (hands_cover, 40 frames)", "[pipeline]") {
-  const Outcome o = runPipeline("hands_cover", 40, true, 2);
+  const Outcome o = runPipeline("hands_cover", 40, Input::Detections, 2);
   const hawor::PipelineResult<double>& r = o.result;
   std::vector<double> errCam;
   int seen = 0;

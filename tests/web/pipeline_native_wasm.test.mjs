@@ -1,6 +1,7 @@
 // One pipeline in C++ (include/hawor/pipeline/pipeline.hpp), two drivers: the JavaScript entry
 // (runPipeline with camera-frame hands, through the WebAssembly core) and the native `hawor
-// world` on the same `hawor synth` sequence and its ground-truth camera-frame hands. They give
+// world` on the same `hawor synth` sequence and its ground-truth camera-frame hands, given as MANO
+// parameters and as 3D joints. They give
 // the same camera and world hands up to floating-point reassociation; bad hands files are refused
 // naming the file and the key. Skipped with a message without the core, the native CLI, ffmpeg
 // or the default hand models.
@@ -31,56 +32,59 @@ test('pipeline: camera-frame hands through node (WebAssembly core) and native `h
     const [fx, fy, cx, cy] = readFileSync(join(dir, 'seq/intrinsics.txt'), 'utf8').split('\n')[0].trim().split(/\s+/).map(Number);
     // runPipeline centres the principal point; the native run is given the same intrinsics
     assert.ok(Math.abs(cx - (W - 1) / 2) < 1e-9 && Math.abs(cy - (H - 1) / 2) < 1e-9 && fx === fy);
-    const native = spawnSync(haworBin, ['world', '--images', join(dir, 'seq/rgb'), '--hands', join(dir, 'seq/hands_gt.npz'),
-      '--intrinsics', `${fx},${fy},${cx},${cy}`, '--out', join(dir, 'native')], { encoding: 'utf8', env: { ...process.env, HAWOR_HAND_DIR: modelsDir } });
-    assert.equal(native.status, 0, native.stderr);
-    const summary = JSON.parse(native.stdout);
-    assert.equal(summary.frames, T);
-
     const { loadCore } = await import('../../web/cli.mjs');
     const core = await loadCore(corePath);
     const gt = core.readNpz(readFileSync(join(dir, 'seq/hands_gt.npz')), 'hands_gt.npz');
     const rgb = execFileSync('ffmpeg', ['-v', 'error', '-i', join(dir, 'seq/rgb/%06d.png'), '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-'], { maxBuffer: 1 << 28 });
     assert.equal(rgb.length, T * W * H * 3);
-    const frames = (async function* () { for (let f = 0; f < T; ++f) yield { index: f, rgba: new Uint8Array(rgb.buffer, rgb.byteOffset + f * W * H * 3, W * H * 3) }; })();
     const row = (key, f, n) => gt[key].data.subarray(n * f, n * (f + 1));
-    const handsCam = (f) => {
-      const out = {};
-      for (const side of ['left', 'right']) {
-        out[side] = gt[`${side}_valid`].data[f] ? { rot: row(`${side}_cam_rot`, f, 3), trans: row(`${side}_cam_trans`, f, 3),
-          handPose: row(`${side}_hand_pose`, f, gt[`${side}_hand_pose`].data.length / T), betas: row(`${side}_betas`, f, gt[`${side}_betas`].data.length / T) } : null;
-      }
-      return out;
-    };
     const handModels = { left: readFileSync(join(modelsDir, 'hand_left.npz')), right: readFileSync(join(modelsDir, 'hand_right.npz')) };
-    const r = await runPipeline({ width: W, height: H, fps: 30, frameCount: T, frames },
-      { core, handModels: { left: new Uint8Array(handModels.left), right: new Uint8Array(handModels.right) }, handsCam, focalPx: fx });
+    // the hands as MANO parameters, then as 3D joints (the model fitted to them)
+    for (const input of ['params', 'joints']) {
+      const native = spawnSync(haworBin, ['world', '--images', join(dir, 'seq/rgb'), '--hands', join(dir, 'seq/hands_gt.npz'), '--hands-input', input,
+        '--intrinsics', `${fx},${fy},${cx},${cy}`, '--out', join(dir, input)], { encoding: 'utf8', env: { ...process.env, HAWOR_HAND_DIR: modelsDir } });
+      assert.equal(native.status, 0, native.stderr);
+      const summary = JSON.parse(native.stdout);
+      assert.equal(summary.frames, T);
+      const frames = (async function* () { for (let f = 0; f < T; ++f) yield { index: f, rgba: new Uint8Array(rgb.buffer, rgb.byteOffset + f * W * H * 3, W * H * 3) }; })();
+      const handsCam = (f) => {
+        const out = {};
+        for (const side of ['left', 'right']) {
+          out[side] = !gt[`${side}_valid`].data[f] ? null : input === 'joints' ? { joints: row(`${side}_joints_cam`, f, 63) }
+            : { rot: row(`${side}_cam_rot`, f, 3), trans: row(`${side}_cam_trans`, f, 3),
+              handPose: row(`${side}_hand_pose`, f, gt[`${side}_hand_pose`].data.length / T), betas: row(`${side}_betas`, f, gt[`${side}_betas`].data.length / T) };
+        }
+        return out;
+      };
+      const r = await runPipeline({ width: W, height: H, fps: 30, frameCount: T, frames },
+        { core, handModels: { left: new Uint8Array(handModels.left), right: new Uint8Array(handModels.right) }, handsCam, focalPx: fx });
 
-    assert.equal(r.scale.method, summary.method);
-    assert.ok(Math.abs(r.scale.scale - summary.scale) <= 1e-9 * summary.scale, `scale ${r.scale.scale} / ${summary.scale}`);
-    assert.equal(r.modelKind, 'camera-frame hands');
-    // the camera (TUM: t x y z qx qy qz qw)
-    const tum = readFileSync(join(dir, 'native/camera.tum'), 'utf8').trim().split('\n').filter((l) => !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
-    assert.equal(tum.length, T);
-    let dCam = 0;
-    for (let f = 0; f < T; ++f) for (let a = 0; a < 3; ++a) dCam = Math.max(dCam, Math.abs(tum[f][1 + a] - r.camera.positions[3 * f + a]));
-    // the world hands
-    const world = core.readNpz(readFileSync(join(dir, 'native/world.npz')), 'world.npz');
-    let dHand = 0, compared = 0;
-    for (const side of ['left', 'right']) {
-      const a = world[`${side}_joints_world`].data, b = r.hands[side].jointsWorld;
-      assert.equal(a.length, b.length);
-      for (let i = 0; i < a.length; ++i) {
-        if (Number.isNaN(a[i]) || Number.isNaN(b[i])) { assert.ok(Number.isNaN(a[i]) && Number.isNaN(b[i]), `${side} joint ${i}: NaN in one run only`); continue; }
-        dHand = Math.max(dHand, Math.abs(a[i] - b[i]));
-        compared += 1;
+      assert.equal(r.scale.method, summary.method);
+      assert.ok(Math.abs(r.scale.scale - summary.scale) <= 1e-9 * summary.scale, `${input}: scale ${r.scale.scale} / ${summary.scale}`);
+      assert.equal(r.modelKind, 'camera-frame hands');
+      // the camera (TUM: t x y z qx qy qz qw)
+      const tum = readFileSync(join(dir, input, 'camera.tum'), 'utf8').trim().split('\n').filter((l) => !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
+      assert.equal(tum.length, T);
+      let dCam = 0;
+      for (let f = 0; f < T; ++f) for (let a = 0; a < 3; ++a) dCam = Math.max(dCam, Math.abs(tum[f][1 + a] - r.camera.positions[3 * f + a]));
+      // the world hands
+      const world = core.readNpz(readFileSync(join(dir, input, 'world.npz')), 'world.npz');
+      let dHand = 0, compared = 0;
+      for (const side of ['left', 'right']) {
+        const a = world[`${side}_joints_world`].data, b = r.hands[side].jointsWorld;
+        assert.equal(a.length, b.length);
+        for (let i = 0; i < a.length; ++i) {
+          if (Number.isNaN(a[i]) || Number.isNaN(b[i])) { assert.ok(Number.isNaN(a[i]) && Number.isNaN(b[i]), `${input}, ${side} joint ${i}: NaN in one run only`); continue; }
+          dHand = Math.max(dHand, Math.abs(a[i] - b[i]));
+          compared += 1;
+        }
+        assert.deepEqual(Array.from(world[`${side}_valid`].data), Array.from(r.hands[side].valid));
       }
-      assert.deepEqual(Array.from(world[`${side}_valid`].data), Array.from(r.hands[side].valid));
+      assert.ok(compared > 1000, `${compared} joint coordinates compared`);
+      t.diagnostic(`${input}, native vs node: camera ${dCam} m, world joints ${dHand} m over ${compared} coordinates; scale ${summary.scale} (${summary.method})`);
+      assert.ok(dCam <= 1e-6, `${input}: camera positions differ by ${dCam} m`);
+      assert.ok(dHand <= 1e-6, `${input}: world joints differ by ${dHand} m`);
     }
-    assert.ok(compared > 1000, `${compared} joint coordinates compared`);
-    t.diagnostic(`native vs node: camera ${dCam} m, world joints ${dHand} m over ${compared} coordinates; scale ${summary.scale} (${summary.method})`);
-    assert.ok(dCam <= 1e-6, `camera positions differ by ${dCam} m`);
-    assert.ok(dHand <= 1e-6, `world joints differ by ${dHand} m`);
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }
@@ -106,7 +110,7 @@ test('hawor world: bad hands files are refused naming the file and the key', { s
     assert.match(r.stderr, /nokey\.npz: the right hand lacks 'right_cam_trans'/);
     r = world(make('nan.npz', "z['left_valid'][:] = True\nz['left_cam_rot'][2, 1] = np.nan"));
     assert.equal(r.status, 1);
-    assert.match(r.stderr, /nan\.npz: the left hand is marked valid at frame 2 but its parameters are not finite/);
+    assert.match(r.stderr, /nan\.npz: 'left_cam_rot' holds a non-finite value at frame 2/);
     r = world(make('size.npz', "z['image_size'] = np.array([640, 480])"));
     assert.equal(r.status, 1);
     assert.match(r.stderr, /size\.npz: 'image_size' says the hands were estimated on other frames than the 160x120 ones/);

@@ -10,7 +10,8 @@
 //      keypoints are undistorted to the virtual pinhole camera first. A fit is believed when its
 //      wrist lies minHandDepth..maxHandDepth in front of the camera and its error is finite.
 //      pushHands instead takes camera-frame hands from any regressor (HaMeR, WiLoR, HaWoR's own
-//      network): no fit.
+//      network): no fit; pushJoints takes camera-frame 3D joints: the fit to them, kept at their
+//      depth.
 //   3. The believed hands' silhouettes at the SLAM's resolution (render/hand_masks.hpp), grown by
 //      maskDilatePx: the SLAM's dual masking (docs/design.md §5).
 //   4. The frame downscaled to grey at slamMaxSide (through a lens: rectified to the virtual
@@ -162,6 +163,51 @@ class Pipeline {
       info.detection[s] = s;
       info.valid[s] = o.fitted;
     }
+    info.slamStatus = trackFrame(image);
+    return info;
+  }
+
+  /// A frame with camera-frame 3D hand joints from another regressor (21 × 3, metres, the
+  /// MediaPipe / OpenPose order; null: that side not seen). The model is fitted to them (their
+  /// projection through the lens as 2D keypoints, their shape as 3D keypoints), then moved so that
+  /// its keypoints' centroid is theirs: the regressor's depth is kept, not re-estimated from the
+  /// hand's size. A side with a joint less than 1 cm in front of the camera is not believed.
+  FrameInfo pushJoints(const ImageU8& image, const std::array<const Points3<Scalar>*, 2>& joints) {
+    checkFrame(image);
+    for (int s = 0; s < 2; ++s) {
+      if (joints[s] && (joints[s]->rows() != kKeypoints || joints[s]->cols() != 3 || !joints[s]->allFinite())) {
+        throw Error("pipeline: frame " + std::to_string(frames_.size()) + ", the " + sideName(s) + " hand: joints must be 21 finite 3D points");
+      }
+    }
+    frames_.emplace_back();
+    handsGiven_ = true;
+    FrameInfo info;
+    const auto t0 = Clock::now();
+    for (int s = 0; s < 2; ++s) {
+      if (!joints[s]) {
+        havePrevious_[s] = false;
+        continue;
+      }
+      Side& o = frames_.back().side[s];
+      const Points3<Scalar>& X = *joints[s];
+      info.detection[s] = s;
+      if (X.col(2).minCoeff() < Scalar(0.01)) {
+        havePrevious_[s] = false;
+        continue;
+      }
+      o.detected = true;
+      o.keypoints2d.resize(kKeypoints, 2);
+      for (int k = 0; k < kKeypoints; ++k) o.keypoints2d.row(k) = lens_.project(Vec3<Scalar>(X.row(k).transpose())).transpose();
+      o.keypoints3d = X;
+      if (!o.keypoints2d.allFinite() || !fitSide(s, o, opt_.camera, true)) continue;
+      const Vec3<Scalar> shift = (X.colwise().mean() - o.keypoints.colwise().mean()).transpose();
+      o.pose.transl += shift;
+      o.keypoints.rowwise() += shift.transpose();
+      previous_[s] = o.pose;
+      o.fitted = believable(o);
+      info.valid[s] = o.fitted;
+    }
+    addTime("fit", t0);
     info.slamStatus = trackFrame(image);
     return info;
   }

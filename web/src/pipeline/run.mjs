@@ -70,11 +70,13 @@
 //                                        world: (63) metres | null }]
 //                                        replaces the perception networks (benchmarks with
 //                                        simulated keypoints); ort and models are then unused
-//           handsCam?: (index) => { left: pose | null, right: pose | null }
+//           handsCam?: (index) => { left: hand | null, right: hand | null }
 //                                        camera-frame hands from another regressor (HaMeR, WiLoR,
-//                                        HaWoR's network), pose objects as HandModel.forward takes
-//                                        ({rot, handPose, betas, trans}, the models' parameters);
-//                                        replaces perception and fit (`hawor world` natively)
+//                                        HaWoR's network): pose objects as HandModel.forward takes
+//                                        ({rot, handPose, betas, trans}, the models' parameters),
+//                                        or {joints} (63: 21 joints, metres, MediaPipe order; the
+//                                        model is fitted to them), one kind per frame; replaces
+//                                        perception and fit (`hawor world` natively)
 //           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
 //           detectGap? (1)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames
@@ -378,9 +380,13 @@ export async function runPipeline(source, options, hooks = {}) {
       }
       const info = { index: frame.index ?? T, hands: [] };
       if (options.handsCam) {
-        // camera-frame hands from another regressor: masks, SLAM (no perception, no fit)
+        // camera-frame hands from another regressor: masks, SLAM (no perception; joints are fitted)
         const given = (await options.handsCam(T)) ?? {};
-        const r = pipeline.pushHands(rgba, { left: given.left ?? null, right: given.right ?? null });
+        const left = given.left ?? null, right = given.right ?? null;
+        const joints = (left ?? right)?.joints !== undefined;
+        if (left && right && (right.joints !== undefined) !== joints) throw new Error(`handsCam(${T}): one hand as joints, the other as parameters; give one kind per frame`);
+        const r = joints ? pipeline.pushJoints(rgba, { left: left?.joints ?? null, right: right?.joints ?? null })
+          : pipeline.pushHands(rgba, { left, right });
         info.slamStatus = r.slamStatus;
         ['left', 'right'].forEach((side, s) => { if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s] }); });
       } else {
