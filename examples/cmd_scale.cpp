@@ -56,8 +56,9 @@ const char* kScaleHelp =
     "\n"
     "Prints {\"scale\", \"method\" (depth|hands|ground|fused), \"confidence\", ...}. The cues that\n"
     "need no depth network (hands, ground) are combined first, a floor reading that could be a\n"
-    "table top taking the reading nearer the hands'; then that and the depth cue: in log space,\n"
-    "weighted by their confidences.\n";
+    "table top taking the reading the hands agree with; then that and the depth cue: in log space,\n"
+    "weighted by their confidences. A cue that disagrees with the most confident one beyond both\n"
+    "their errors is left out (\"left_out\").\n";
 
 std::string frameName(int f, const char* ext) {
   char b[32];
@@ -263,6 +264,9 @@ int cmdScale(int argc, char** argv) {
   hawor::writeTum(out, scaled);
   JsonObject head;
   head.num("scale", scale).str("method", fused.method).num("confidence", fused.confidence);
+  std::vector<std::string> leftOut = r.noDepth.leftOut;
+  leftOut.insert(leftOut.end(), fused.leftOut.begin(), fused.leftOut.end());
+  if (!leftOut.empty()) head.strings("left_out", leftOut);  // cues inconsistent with the most confident
   std::string s = head.dump();
   const std::string rest = j.dump();
   if (rest.size() > 2) s = s.substr(0, s.size() - 1) + ", " + rest.substr(1);

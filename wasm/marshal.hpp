@@ -148,6 +148,11 @@ inline val scaleToJs(const hawor::MetricScaleResult<double>& r, double eyeHeight
       }
       o.set("ground", g);
     }
+    val left = val::array();  // cues inconsistent with the most confident (fuse_scale.hpp)
+    for (const auto* f : {&r.noDepth, &r.fused}) {
+      for (const std::string& c : f->leftOut) left.call<void>("push", c);
+    }
+    o.set("leftOut", left);
     return o;
 }
 

@@ -181,6 +181,10 @@ TEST_CASE("ground scale: a table top alone is ambiguous and carries the table-to
   CHECK(hawor::groundReadingNear(r, 1.05 * g.alpha) == r.alternativeScale);
   CHECK(hawor::groundReadingNear(r, 1.7 * g.alpha) == r.scale);
   CHECK(hawor::groundReadingNear(r, std::nan("")) == r.scale);
+  // a hand scale that agrees with neither reading within its error cannot choose: the floor's
+  // (0.5 × the truth at confidence 0.5 is 0.63 in log from the table-top reading, ~6σ)
+  CHECK(hawor::groundReadingNear(r, 0.5 * g.alpha, 0.5) == r.scale);
+  CHECK(hawor::groundReadingNear(r, 0.9 * g.alpha, 0.5) == r.alternativeScale);
   hawor::MetricScaleOptions<double> opt;
   opt.setFps(30);
   const std::vector<hawor::KeyframeDepthPairs<double>> noDepth;
@@ -272,17 +276,32 @@ TEST_CASE("ground scale: walls only, a cloud, too few points, non-finite input: 
   }
 }
 
-TEST_CASE("scale fusion of several cues: log-space weights, absent and zero-confidence cues", "[scale]") {
+TEST_CASE("scale fusion of several cues: log-space weights, absent, zero-confidence and inconsistent cues", "[scale]") {
   const double nan = std::nan("");
   const auto one = hawor::fuseScaleCues<double>({{nan, 0.9, "depth"}, {2.0, 0.3, "ground"}});
   CHECK(one.method == "ground");
   CHECK(one.scale == 2.0);
   CHECK(one.confidence == 0.3);
-  const auto three = hawor::fuseScaleCues<double>({{1.0, 0.5, "depth"}, {4.0, 0.25, "hands"}, {2.0, 0.25, "ground"}});
+  // within their errors (c = 0.5: 5 %, c = 0.25: 8.7 %): the confidence-weighted mean in log space
+  const auto three = hawor::fuseScaleCues<double>({{1.0, 0.5, "depth"}, {1.2, 0.25, "hands"}, {0.9, 0.25, "ground"}});
   CHECK(three.method == "fused");
-  CHECK(three.scale == Approx(std::exp((0.5 * std::log(1.0) + 0.25 * std::log(4.0) + 0.25 * std::log(2.0)) / 1.0)));
+  CHECK(three.scale == Approx(std::exp((0.5 * std::log(1.0) + 0.25 * std::log(1.2) + 0.25 * std::log(0.9)) / 1.0)));
   CHECK(three.confidence == 0.5);
+  CHECK(three.leftOut.empty());
   const auto zero = hawor::fuseScaleCues<double>({{3.0, 0.0, "hands"}, {5.0, 0.2, "ground"}});
   CHECK(zero.method == "ground");  // a zero-confidence cue does not take part beside another
   CHECK_FALSE(hawor::fuseScaleCues<double>({{nan, 1.0, "depth"}, {-1.0, 1.0, "hands"}}).ok());
+  // beyond 3 standard errors of the most confident cue: left out and named, not averaged
+  for (const double ratio : {0.1, 1.25, 4.0}) {
+    const double eb = 0.05 * std::sqrt(1 / 0.5 - 1), eh = 0.05 * std::sqrt(1 / 0.25 - 1);  // the mapping, independently
+    const bool consistent = std::abs(std::log(ratio)) <= 3 * std::sqrt(eb * eb + eh * eh);
+    const auto f = hawor::fuseScaleCues<double>({{2.0, 0.5, "ground"}, {2.0 * ratio, 0.25, "hands"}});
+    INFO("ratio " << ratio);
+    CHECK(f.method == (consistent ? "fused" : "ground"));
+    CHECK(f.scale == Approx(consistent ? std::exp((0.5 * std::log(2.0) + 0.25 * std::log(2.0 * ratio)) / 0.75) : 2.0));
+    CHECK(f.leftOut.size() == (consistent ? 0u : 1u));
+    if (!consistent) CHECK(f.leftOut[0].rfind("hands ", 0) == 0);
+  }
+  CHECK(hawor::confidenceLogError(hawor::scaleConfidence(0.08)) == Approx(0.08));
+  CHECK(std::isinf(hawor::confidenceLogError(0.0)));
 }

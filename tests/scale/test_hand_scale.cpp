@@ -157,9 +157,9 @@ TEST_CASE("scale fusion: one cue, both cues in log space, none", "[scale]") {
   const hawor::FusedScale<double> h = hawor::fuseScales(nan, 0.0, 3.0, 0.4);
   CHECK(h.method == "hands");
   CHECK(h.scale == 3.0);
-  const hawor::FusedScale<double> f = hawor::fuseScales(2.0, 0.75, 8.0, 0.25);
+  const hawor::FusedScale<double> f = hawor::fuseScales(2.0, 0.75, 2.2, 0.25);
   CHECK(f.method == "fused");
-  CHECK(f.scale == Approx(std::pow(2.0, 0.75) * std::pow(8.0, 0.25)));  // geometric weighting
+  CHECK(f.scale == Approx(std::pow(2.0, 0.75) * std::pow(2.2, 0.25)));  // geometric weighting
   CHECK(f.confidence == 0.75);
   CHECK_FALSE(hawor::fuseScales(nan, 1.0, -1.0, 1.0).ok());
   hawor::SequenceScale<double> seq;

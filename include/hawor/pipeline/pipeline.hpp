@@ -596,6 +596,9 @@ class Pipeline {
       res.scale = res.scaleCues.fused.scale;
       res.scaleMethod = res.scaleCues.fused.method;
       res.scaleConfidence = res.scaleCues.fused.confidence;
+      for (const FusedScale<Scalar>* f : {&res.scaleCues.noDepth, &res.scaleCues.fused}) {
+        for (const std::string& c : f->leftOut) warnings_.push_back("metric scale: the " + c + " cue disagreed with the more confident one beyond both their errors and was left out");
+      }
       if (res.scaleConfidence < Scalar(0.4)) {
         char buf[160];
         std::snprintf(buf, sizeof buf, "the metric scale is uncertain (method %s, confidence %.2f)", res.scaleMethod.c_str(), double(res.scaleConfidence));

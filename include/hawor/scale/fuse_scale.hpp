@@ -3,15 +3,22 @@
 // (ground_scale.hpp) one. A single estimate is the answer; several give the confidence-weighted
 // mean in log space, log α = Σ c_k·log α_k / Σ c_k (scales multiply, so they average in log
 // space), with the largest confidence.
+// Every cue maps its relative standard error e to a confidence the same way (confidence.hpp),
+// so e_k = 0.05·√(1/c_k − 1). Cues that disagree beyond their errors are not
+// averaged: a cue whose |log α_k − log α_b| exceeds 3·√(e_k² + e_b²) against the most confident
+// cue b is left out (and named in leftOut). A mean of two readings 10× apart is neither: a hand
+// cue fooled by hands that move with the head, averaged with a floor reading, lands far from both.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "hawor/common.hpp"
+#include "hawor/scale/confidence.hpp"
 #include "hawor/scale/robust_scale.hpp"
 
 namespace hawor {
@@ -22,7 +29,7 @@ template <typename Scalar>
 Scalar depthScaleConfidence(const SequenceScale<Scalar>& s) {
   if (!s.ok() || s.keyframes <= 0) return Scalar(0);
   const double spread = std::isfinite(double(s.relativeSpread)) ? double(s.relativeSpread) : 1.0;
-  return Scalar(double(s.fitted) / double(s.keyframes) / (1.0 + (spread / 0.05) * (spread / 0.05)));
+  return Scalar(double(s.fitted) / double(s.keyframes) * scaleConfidence(spread));
 }
 
 template <typename Scalar>
@@ -30,6 +37,7 @@ struct FusedScale {
   Scalar scale = std::numeric_limits<Scalar>::quiet_NaN();
   Scalar confidence = Scalar(0);
   std::string method;  ///< the cue's name ("depth", "hands", "ground") or "fused"
+  std::vector<std::string> leftOut;  ///< cues left out as inconsistent, each "NAME α (confidence c)"
   bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
 };
 
@@ -57,6 +65,22 @@ FusedScale<Scalar> fuseScaleCues(const std::vector<ScaleCue<Scalar>>& cues) {
     }
     if (!weighted.empty()) have = weighted;
     else have.resize(1);
+  }
+  if (have.size() > 1) {  // left out: those inconsistent with the most confident
+    const ScaleCue<Scalar>* best = *std::max_element(have.begin(), have.end(), [](const auto* a, const auto* b) { return a->confidence < b->confidence; });
+    const double eb = confidenceLogError(double(best->confidence));
+    std::vector<const ScaleCue<Scalar>*> kept;
+    for (const auto* c : have) {
+      const double e = confidenceLogError(double(c->confidence));
+      if (c == best || std::abs(std::log(double(c->scale) / double(best->scale))) <= 3 * std::sqrt(e * e + eb * eb)) {
+        kept.push_back(c);
+      } else {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " %.4g (confidence %.2f)", double(c->scale), double(c->confidence));
+        out.leftOut.push_back(c->name + buf);
+      }
+    }
+    have = kept;
   }
   if (have.size() == 1) {
     out.scale = have[0]->scale, out.confidence = std::max(Scalar(0), have[0]->confidence), out.method = have[0]->name;

@@ -46,6 +46,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "hawor/common.hpp"
+#include "hawor/scale/confidence.hpp"
 #include "hawor/geometry/se3.hpp"
 #include "hawor/slam/ransac.hpp"
 
@@ -330,15 +331,18 @@ GroundScaleResult<Scalar> groundPlaneScale(const std::vector<Vec3<Scalar>>& poin
   return r;
 }
 
-/// The reading of `g` to fuse beside another scale estimate `near` (e.g. the hands'): the floor
-/// reading, or when the level is ambiguous and the table-top reading is nearer `near` in log, that
-/// one. NaN when `g` has no scale; the floor reading when `near` is not a positive number.
+/// The reading of `g` to fuse beside another scale estimate `near` of confidence `nearConfidence`
+/// (e.g. the hands'): the floor reading, or when the level is ambiguous and the table-top reading
+/// is nearer `near` in log and agrees with it within 3 standard errors (confidence.hpp's mapping
+/// of confidences to errors), that one: a cue that agrees with neither reading cannot choose
+/// between them. NaN when `g` has no scale; the floor reading when `near` is not a positive number.
 template <typename Scalar>
-Scalar groundReadingNear(const GroundScaleResult<Scalar>& g, Scalar near) {
+Scalar groundReadingNear(const GroundScaleResult<Scalar>& g, Scalar near, Scalar nearConfidence = Scalar(1)) {
   if (!g.ok()) return std::numeric_limits<Scalar>::quiet_NaN();
-  if (g.ambiguous && std::isfinite(double(near)) && near > Scalar(0) && g.alternativeScale > Scalar(0) &&
-      std::abs(std::log(g.alternativeScale / near)) < std::abs(std::log(g.scale / near))) {
-    return g.alternativeScale;
+  if (g.ambiguous && std::isfinite(double(near)) && near > Scalar(0) && g.alternativeScale > Scalar(0)) {
+    const double toAlt = std::abs(std::log(double(g.alternativeScale / near))), eg = confidenceLogError(double(g.confidence)),
+                 en = confidenceLogError(double(nearConfidence));
+    if (toAlt < std::abs(std::log(double(g.scale / near))) && toAlt <= 3 * std::sqrt(eg * eg + en * en)) return g.alternativeScale;
   }
   return g.scale;
 }

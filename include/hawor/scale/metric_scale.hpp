@@ -129,7 +129,7 @@ MetricScaleResult<Scalar> estimateMetricScale(const std::vector<KeyframeDepthPai
     r.ground = groundPlaneScale(*mapPoints, T_w_c, opt.ground);
     r.groundRan = true;
     if (r.ground.ok()) {
-      gs = groundReadingNear(r.ground, hs);  // floor or table top: the one nearer the hands
+      gs = groundReadingNear(r.ground, hs, hc);  // floor or table top: the one the hands agree with
       gc = r.ground.confidence;
       r.groundUsed = gs;
     }

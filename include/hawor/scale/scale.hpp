@@ -10,5 +10,6 @@
 #include "hand_smoothness_scale.hpp"
 #include "hand_scale.hpp"
 #include "ground_scale.hpp"
+#include "confidence.hpp"
 #include "fuse_scale.hpp"
 #include "metric_scale.hpp"
