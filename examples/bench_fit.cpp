@@ -139,9 +139,9 @@ hawor::Vec3<Scalar> randomRotation(std::mt19937& rng) {
 // Wrist keypoint at (x, y, z) for pose p (sets transl).
 template <typename Scalar>
 void placeWrist(const hawor::HandModel<Scalar>& m, hawor::HandPose<Scalar>& p, const Eigen::Vector3d& at) {
-  p.transl.setZero();
+  p.trans.setZero();
   const hawor::HandOutput<Scalar> o = hawor::forward(m, p);
-  p.transl = at.cast<Scalar>() - o.keypoints.row(0).transpose();
+  p.trans = at.cast<Scalar>() - o.keypoints.row(0).transpose();
 }
 
 Eigen::Vector3d randomWristPosition(std::mt19937& rng) {
@@ -231,8 +231,8 @@ int run(const std::string& modelPath, int hands, int sequences, int frames, unsi
   int warmFits = 0, warmIterations = 0;
   for (int h = 0; h < hands; ++h) {
     hawor::HandPose<Scalar> truth = hawor::HandPose<Scalar>::zero(m);
-    truth.jointPose = hawor::sampleJointPose(lim, rng, 0.9);
-    truth.globalOrient = randomRotation<Scalar>(rng);
+    truth.handPose = hawor::sampleJointPose(lim, rng, 0.9);
+    truth.rot = randomRotation<Scalar>(rng);
     for (int b = 0; b < truth.betas.size(); ++b) truth.betas(b) = Scalar(-1.5 + 3.0 * uni(rng));
     placeWrist(m, truth, randomWristPosition(rng));
     hawor::Points3<double> gt;
@@ -246,11 +246,11 @@ int run(const std::string& modelPath, int hands, int sequences, int frames, unsi
     // Warm start from a nearby previous frame.
     hawor::HandPose<Scalar> prev = truth;
     const double d0 = g(rng), d1 = g(rng), d2 = g(rng);
-    prev.globalOrient = hawor::matrixToAxisAngle(hawor::Mat3<Scalar>(
+    prev.rot = hawor::matrixToAxisAngle(hawor::Mat3<Scalar>(
         hawor::axisAngleToMatrix(hawor::Vec3<Scalar>(Scalar(0.03 * d0), Scalar(0.03 * d1), Scalar(0.03 * d2))) *
-        hawor::axisAngleToMatrix(truth.globalOrient)));
-    for (int c = 0; c < 3; ++c) prev.transl(c) += Scalar(0.006 * g(rng));
-    for (Eigen::Index i = 0; i < prev.jointPose.size(); ++i) prev.jointPose.data()[i] += Scalar(0.03 * g(rng));
+        hawor::axisAngleToMatrix(truth.rot)));
+    for (int c = 0; c < 3; ++c) prev.trans(c) += Scalar(0.006 * g(rng));
+    for (Eigen::Index i = 0; i < prev.handPose.size(); ++i) prev.handPose.data()[i] += Scalar(0.03 * g(rng));
     prev.betas = rc.pose.betas;
     const long a0 = g_allocations.load();
     c0 = cpuMs();
@@ -289,7 +289,7 @@ int run(const std::string& modelPath, int hands, int sequences, int frames, unsi
           const double lo = static_cast<double>(r.lo(c)), hi = static_cast<double>(r.hi(c));
           a(c) = Scalar(0.5 * (lo + hi) + 0.4 * (hi - lo) * std::sin(6.283185307179586 * freq[i] * t + phase[i]));
         }
-        truth.jointPose.row(j - 1) = lim.axisAngle(j, a).transpose();
+        truth.handPose.row(j - 1) = lim.axisAngle(j, a).transpose();
       }
       hawor::Vec3<Scalar> dr;
       Eigen::Vector3d dt;
@@ -297,7 +297,7 @@ int run(const std::string& modelPath, int hands, int sequences, int frames, unsi
         dr(c) = Scalar(0.5 * std::sin(6.283185307179586 * freq[static_cast<std::size_t>(c)] * t + phase[static_cast<std::size_t>(c)]));
         dt(c) = 0.06 * std::sin(6.283185307179586 * freq[static_cast<std::size_t>(3 + c)] * t + phase[static_cast<std::size_t>(3 + c)]);
       }
-      truth.globalOrient = hawor::matrixToAxisAngle(hawor::Mat3<Scalar>(hawor::axisAngleToMatrix(dr) * hawor::axisAngleToMatrix(orient)));
+      truth.rot = hawor::matrixToAxisAngle(hawor::Mat3<Scalar>(hawor::axisAngleToMatrix(dr) * hawor::axisAngleToMatrix(orient)));
       placeWrist(m, truth, wrist + dt);
       hawor::Points3<double> gt;
       const hawor::HandObservation<Scalar> obs = observe(m, truth, cam, 1.0 + uni(rng), 0.005, rng, gt);

@@ -78,8 +78,8 @@ void bench(const hawor::HandModel<Scalar>& m, const char* label) {
   std::vector<hawor::HandPose<Scalar>> poses;
   for (int k = 0; k < 16; ++k) {
     auto p = hawor::HandPose<Scalar>::zero(m);
-    for (int c = 0; c < 3; ++c) p.globalOrient(c) = Scalar(g(rng));
-    for (Eigen::Index i = 0; i < p.jointPose.size(); ++i) p.jointPose.data()[i] = Scalar(g(rng));
+    for (int c = 0; c < 3; ++c) p.rot(c) = Scalar(g(rng));
+    for (Eigen::Index i = 0; i < p.handPose.size(); ++i) p.handPose.data()[i] = Scalar(g(rng));
     for (Eigen::Index i = 0; i < p.betas.size(); ++i) p.betas(i) = Scalar(g(rng));
     poses.push_back(p);
   }
@@ -93,7 +93,7 @@ void bench(const hawor::HandModel<Scalar>& m, const char* label) {
     sink += double(out.vertices(0, 0));
   });
   const Timing posed = timeUs([&](int i) {
-    hawor::poseHand(m, ws.rot.data(), poses[static_cast<std::size_t>(i % 16)].transl, ws, out);
+    hawor::poseHand(m, ws.rot.data(), poses[static_cast<std::size_t>(i % 16)].trans, ws, out);
     sink += double(out.vertices(1, 0));
   });
   // The pose-corrective product alone (3V x 9(J-1) matrix times the feature vector).

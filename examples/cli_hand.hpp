@@ -121,25 +121,25 @@ inline ParamArray readParamArray(const hawor::Npz& z, const std::vector<std::str
 }
 
 /// The hand parameters of an npz for a model with J joints and B shape coefficients:
-///   orient  `global_orient` or `rot`      (3) or (T,3) axis-angle, radians
-///   pose    `hand_pose`                   ((J-1)*3), (J-1,3), (T,(J-1)*3) or (T,J-1,3)
-///   betas   `betas`                       (b) or (T,b), b <= B
-///   transl  `transl` or `trans`           (3) or (T,3) metres
+///   rot       `global_orient` or `rot`    (3) or (T,3) axis-angle, radians
+///   handPose  `hand_pose`                 ((J-1)*3), (J-1,3), (T,(J-1)*3) or (T,J-1,3)
+///   betas     `betas`                     (b) or (T,b), b <= B
+///   trans     `transl` or `trans`         (3) or (T,3) metres
 /// Missing arrays are zeros; single-frame arrays serve every frame.
 struct HandParams {
-  ParamArray orient, pose, betas, transl;
+  ParamArray rot, handPose, betas, trans;  ///< HandPose's fields
   std::string source;
 
   /// T of the per-frame arrays (all equal, checked), 0 when every array is single-frame.
   size_t frames() const {
     size_t t = 0;
-    for (const ParamArray* a : {&orient, &pose, &betas, &transl}) t = a->frames > t ? a->frames : t;
+    for (const ParamArray* a : {&rot, &handPose, &betas, &trans}) t = a->frames > t ? a->frames : t;
     return t;
   }
 
   /// Whether every value of frame t is finite.
   bool finiteAt(size_t t) const {
-    for (const ParamArray* a : {&orient, &pose, &betas, &transl}) {
+    for (const ParamArray* a : {&rot, &handPose, &betas, &trans}) {
       if (!a->present()) continue;
       const double* v = a->at(t);
       for (size_t i = 0; i < a->perFrame; ++i) {
@@ -163,22 +163,22 @@ struct HandParams {
       }
       return v;
     };
-    if (orient.present()) {
-      const double* v = check(orient);
-      p.globalOrient = hawor::Vec3<double>(v[0], v[1], v[2]);
+    if (rot.present()) {
+      const double* v = check(rot);
+      p.rot = hawor::Vec3<double>(v[0], v[1], v[2]);
     }
-    if (pose.present()) {
-      const double* v = check(pose);
-      for (Eigen::Index i = 0; i < p.jointPose.size(); ++i) p.jointPose.data()[i] = v[i];  // row-major
+    if (handPose.present()) {
+      const double* v = check(handPose);
+      for (Eigen::Index i = 0; i < p.handPose.size(); ++i) p.handPose.data()[i] = v[i];  // row-major
     }
     if (betas.present()) {
       const double* v = check(betas);
       p.betas = hawor::VecX<double>::Zero(m.numBetas());
       for (size_t i = 0; i < betas.perFrame; ++i) p.betas(static_cast<Eigen::Index>(i)) = v[i];
     }
-    if (transl.present()) {
-      const double* v = check(transl);
-      p.transl = hawor::Vec3<double>(v[0], v[1], v[2]);
+    if (trans.present()) {
+      const double* v = check(trans);
+      p.trans = hawor::Vec3<double>(v[0], v[1], v[2]);
     }
     return p;
   }
@@ -194,11 +194,11 @@ inline HandParams readHandParams(const hawor::Npz& z, const hawor::HandModel<dou
   const size_t J1 = static_cast<size_t>(m.numJoints() - 1), B = static_cast<size_t>(m.numBetas());
   HandParams h;
   h.source = z.source();
-  h.orient = readParamArray(z, orientKeys, {{3}}, "(3) or (T,3)");
-  h.pose = readParamArray(z, {poseKey}, {{J1 * 3}, {J1, 3}},
+  h.rot = readParamArray(z, orientKeys, {{3}}, "(3) or (T,3)");
+  h.handPose = readParamArray(z, {poseKey}, {{J1 * 3}, {J1, 3}},
                           "(" + std::to_string(J1 * 3) + "), (" + std::to_string(J1) + ",3) or with a leading T axis "
                           "(the model has " + std::to_string(J1 + 1) + " joints)");
-  h.transl = readParamArray(z, translKeys, {{3}}, "(3) or (T,3)");
+  h.trans = readParamArray(z, translKeys, {{3}}, "(3) or (T,3)");
   if (z.has(betasKey)) {
     const std::vector<size_t>& s = z.get(betasKey).shape;
     const size_t b = s.empty() ? 0 : s.back();
@@ -210,7 +210,7 @@ inline HandParams readHandParams(const hawor::Npz& z, const hawor::HandModel<dou
   }
   size_t T = 0;
   std::string first;
-  for (const ParamArray* a : {&h.orient, &h.pose, &h.betas, &h.transl}) {
+  for (const ParamArray* a : {&h.rot, &h.handPose, &h.betas, &h.trans}) {
     if (!a->frames) continue;
     if (T && a->frames != T) {
       throw hawor::Error(z.source() + ": '" + first + "' has " + std::to_string(T) + " frames but '" + a->key +

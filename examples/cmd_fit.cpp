@@ -225,10 +225,10 @@ int cmdFit(int argc, char** argv) {
     msPerFrame.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     const hawor::HandPose<double>& p = res.pose;
     for (int c = 0; c < 3; ++c) {
-      rot[t * 3 + static_cast<size_t>(c)] = p.globalOrient(c);
-      trans[t * 3 + static_cast<size_t>(c)] = p.transl(c);
+      rot[t * 3 + static_cast<size_t>(c)] = p.rot(c);
+      trans[t * 3 + static_cast<size_t>(c)] = p.trans(c);
     }
-    for (size_t i = 0; i < J1 * 3; ++i) handPose[t * J1 * 3 + i] = p.jointPose.data()[i];  // row-major
+    for (size_t i = 0; i < J1 * 3; ++i) handPose[t * J1 * 3 + i] = p.handPose.data()[i];  // row-major
     for (size_t b = 0; b < B; ++b) betas[t * B + b] = p.betas(static_cast<Eigen::Index>(b));
     for (size_t i = 0; i < K * 3; ++i) joints[t * K * 3 + i] = res.keypoints.data()[i];
     rms[t] = res.reprojRmsPx;

@@ -60,7 +60,7 @@ int cmdHand(int argc, char** argv) {
   if (args.has("pose")) {
     const hawor::Npz z = hawor::Npz::read(args.required("pose"));
     const HandParams params = readHandParams(z, m, {"global_orient", "rot"}, {"transl", "trans"});
-    if (!params.orient.present() && !params.pose.present() && !params.betas.present() && !params.transl.present()) {
+    if (!params.rot.present() && !params.handPose.present() && !params.betas.present() && !params.trans.present()) {
       std::string keys;
       for (const std::string& k : z.names()) keys += (keys.empty() ? "" : ", ") + k;
       throw hawor::Error(z.source() + ": holds none of global_orient / rot, hand_pose, betas, transl / trans (keys: " +

@@ -124,13 +124,13 @@ InfillHandIn infillReadHand(const hawor::Npz& z, const std::string& side) {
   h.poseShape = pa.shape;
   if (pa.shape.size() == 3 && pa.shape[0] == T && pa.shape[2] == 3) {
     const std::vector<double> pv = z.getAs<double>(p + "hand_pose");
-    h.motion.hand_pose.resize(static_cast<Eigen::Index>(T), static_cast<Eigen::Index>(3 * pa.shape[1]));
-    if (!pv.empty()) std::copy(pv.begin(), pv.end(), h.motion.hand_pose.data());
+    h.motion.handPose.resize(static_cast<Eigen::Index>(T), static_cast<Eigen::Index>(3 * pa.shape[1]));
+    if (!pv.empty()) std::copy(pv.begin(), pv.end(), h.motion.handPose.data());
   } else {
     if (pa.shape.size() != 2 || pa.shape[0] != T || pa.shape[1] % 3 != 0)
       throw hawor::Error(z.source() + ": '" + p + "hand_pose' has shape " + hawor::shapeString(pa.shape) +
                          ", expected (" + Ts + ",3K) or (" + Ts + ",K,3) (MANO: K = 15)");
-    h.motion.hand_pose = infillReadRows(z, p + "hand_pose", T, -1, "");
+    h.motion.handPose = infillReadRows(z, p + "hand_pose", T, -1, "");
   }
   try {
     h.motion.validate();
@@ -165,8 +165,8 @@ void infillLoadModels(const Args& args, const char* argv0, std::array<hawor::Han
 hawor::NpyArray infillJoints(const hawor::HandModel<double>& model, const hawor::HandMotion<double>& m,
                              const std::string& what) {
   const Eigen::Index J1 = model.numJoints() - 1, K = model.numKeypoints();
-  if (m.hand_pose.cols() != 3 * J1)
-    throw hawor::Error(what + ": hand_pose has " + std::to_string(m.hand_pose.cols() / 3) +
+  if (m.handPose.cols() != 3 * J1)
+    throw hawor::Error(what + ": hand_pose has " + std::to_string(m.handPose.cols() / 3) +
                        " joint rotations, the --model has " + std::to_string(J1) + " (--joints)");
   if (K == 0) throw hawor::Error("--joints: the --model has no keypoints");
   const Eigen::Index T = m.frames();
@@ -175,12 +175,12 @@ hawor::NpyArray infillJoints(const hawor::HandModel<double>& model, const hawor:
   hawor::HandOutput<double> o;
   hawor::HandPose<double> pose = hawor::HandPose<double>::zero(model);
   for (Eigen::Index t = 0; t < T; ++t) {
-    if (!m.rot.row(t).allFinite() || !m.trans.row(t).allFinite() || !m.hand_pose.row(t).allFinite() ||
+    if (!m.rot.row(t).allFinite() || !m.trans.row(t).allFinite() || !m.handPose.row(t).allFinite() ||
         !m.betas.row(t).allFinite())
       continue;
-    pose.globalOrient = m.rot.row(t).transpose();
-    pose.transl = m.trans.row(t).transpose();
-    for (Eigen::Index j = 0; j < J1; ++j) pose.jointPose.row(j) = m.hand_pose.row(t).segment(3 * j, 3);
+    pose.rot = m.rot.row(t).transpose();
+    pose.trans = m.trans.row(t).transpose();
+    for (Eigen::Index j = 0; j < J1; ++j) pose.handPose.row(j) = m.handPose.row(t).segment(3 * j, 3);
     pose.betas = m.betas.row(t).transpose();
     hawor::forward(model, pose, ws, o);
     std::copy(o.keypoints.data(), o.keypoints.data() + 3 * K, out.begin() + t * K * 3);
@@ -300,7 +300,7 @@ int cmdInfill(int argc, char** argv) {
     const size_t Tn = static_cast<size_t>(T);
     outz.set(p + "trans", infillRowsArray(r.motion.trans, {Tn, 3}));
     outz.set(p + "rot", infillRowsArray(r.motion.rot, {Tn, 3}));
-    outz.set(p + "hand_pose", infillRowsArray(r.motion.hand_pose, hands[s].poseShape));
+    outz.set(p + "hand_pose", infillRowsArray(r.motion.handPose, hands[s].poseShape));
     outz.set(p + "betas", infillRowsArray(r.motion.betas, {Tn, static_cast<size_t>(r.motion.betas.cols())}));
     outz.set(p + "valid", hands[s].validArray);
     hawor::NpyArray filled = hawor::NpyArray::fromData(r.filled.data(), {Tn});

@@ -163,7 +163,7 @@ hawor::JointSequence<double> jointsOf(const hawor::Npz& z, const std::string& ke
   const std::vector<std::string> transKeys = cam ? std::vector<std::string>{"cam_trans"}
                                                  : std::vector<std::string>{"trans", "transl"};
   const HandParams p = readHandParams(z, m, rotKeys, transKeys);
-  if (!p.orient.present() || !p.pose.present() || !p.transl.present()) {
+  if (!p.rot.present() || !p.handPose.present() || !p.trans.present()) {
     throw hawor::Error(z.source() + " has no '" + key + "' and its hand parameters are incomplete: '" +
                        (cam ? "cam_rot" : "rot") + "', 'hand_pose' and '" + (cam ? "cam_trans" : "trans") +
                        "' are needed");

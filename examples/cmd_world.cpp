@@ -106,10 +106,10 @@ GivenHand readGivenHand(const hawor::Npz& z, const std::string& side, size_t T, 
     return h;
   }
   const HandParams hp = readHandParams(z, model, {p + "cam_rot", p + "global_orient"}, {p + "cam_trans", p + "transl"}, p);
-  if (!hp.orient.present() && !hp.transl.present() && !hp.pose.present()) return h;
-  for (const ParamArray* a : {&hp.orient, &hp.transl, &hp.pose}) {
+  if (!hp.rot.present() && !hp.trans.present() && !hp.handPose.present()) return h;
+  for (const ParamArray* a : {&hp.rot, &hp.trans, &hp.handPose}) {
     if (!a->present()) {
-      const std::string k = a == &hp.orient ? "cam_rot" : a == &hp.transl ? "cam_trans" : "hand_pose";
+      const std::string k = a == &hp.rot ? "cam_rot" : a == &hp.trans ? "cam_trans" : "hand_pose";
       throw hawor::Error(z.source() + ": the " + side + " hand lacks '" + p + k + "' (a hand needs cam_rot, cam_trans and hand_pose)");
     }
   }
@@ -131,7 +131,7 @@ void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>&
     const hawor::PipelineHand<double>& h = r.hands[s];
     z.set(p + "trans", hawor::NpyArray::fromData(h.world.trans.data(), {T, 3}));
     z.set(p + "rot", hawor::NpyArray::fromData(h.world.rot.data(), {T, 3}));
-    z.set(p + "hand_pose", hawor::NpyArray::fromData(h.world.hand_pose.data(), {T, static_cast<size_t>(h.world.hand_pose.cols())}));
+    z.set(p + "hand_pose", hawor::NpyArray::fromData(h.world.handPose.data(), {T, static_cast<size_t>(h.world.handPose.cols())}));
     z.set(p + "betas", hawor::NpyArray::fromData(h.world.betas.data(), {T, static_cast<size_t>(h.world.betas.cols())}));
     z.set(p + "joints_world", hawor::NpyArray::fromData(h.jointsWorld.data(), {T, 21, 3}));
     std::vector<uint8_t> v(h.valid.begin(), h.valid.end()), f(h.infilled.begin(), h.infilled.end());

@@ -422,7 +422,7 @@ hawor::HandMotion<double> motionFrom(const val& m, int T) {
   hawor::HandMotion<double> h;
   h.rot = rows(m["rot"], T, 3, false, "rot");
   h.trans = rows(m["trans"], T, 3, false, "trans");
-  h.hand_pose = rows(m["handPose"], T, 0, true, "handPose");
+  h.handPose = rows(m["handPose"], T, 0, true, "handPose");
   h.betas = rows(m["betas"], T, 0, true, "betas");
   h.valid = exactly<uint8_t>(m["valid"], static_cast<size_t>(T), "valid");
   h.validate();
@@ -433,7 +433,7 @@ val motionTo(const hawor::HandMotion<double>& h) {
   val o = val::object();
   o.set("rot", f64(h.rot.data(), static_cast<size_t>(h.rot.size())));
   o.set("trans", f64(h.trans.data(), static_cast<size_t>(h.trans.size())));
-  o.set("handPose", f64(h.hand_pose.data(), static_cast<size_t>(h.hand_pose.size())));
+  o.set("handPose", f64(h.handPose.data(), static_cast<size_t>(h.handPose.size())));
   o.set("betas", f64(h.betas.data(), static_cast<size_t>(h.betas.size())));
   o.set("valid", toTyped(h.valid.data(), h.valid.size(), "Uint8Array"));
   return o;

@@ -87,9 +87,9 @@ inline hawor::HandPose<double> poseFrom(const val& p, const hawor::HandModel<dou
   const std::vector<double> rot = exactly(p["rot"], 3, what + ".rot");
   const std::vector<double> trans = exactly(p["trans"], 3, what + ".trans");
   const std::vector<double> hp = exactly(p["handPose"], 3 * J1, what + ".handPose");
-  pose.globalOrient = hawor::Vec3<double>(rot[0], rot[1], rot[2]);
-  pose.transl = hawor::Vec3<double>(trans[0], trans[1], trans[2]);
-  std::copy(hp.begin(), hp.end(), pose.jointPose.data());  // row-major (J-1,3)
+  pose.rot = hawor::Vec3<double>(rot[0], rot[1], rot[2]);
+  pose.trans = hawor::Vec3<double>(trans[0], trans[1], trans[2]);
+  std::copy(hp.begin(), hp.end(), pose.handPose.data());  // row-major (J-1,3)
   if (!absent(p["betas"])) {
     const std::vector<double> b = fromTyped<double>(p["betas"]);
     if (b.size() > static_cast<size_t>(model.numBetas())) {
@@ -102,10 +102,10 @@ inline hawor::HandPose<double> poseFrom(const val& p, const hawor::HandModel<dou
 }
 
 inline void setPose(val& o, const hawor::HandPose<double>& p) {
-  o.set("rot", f64(p.globalOrient.data(), 3));
-  o.set("handPose", f64(p.jointPose.data(), static_cast<size_t>(p.jointPose.size())));
+  o.set("rot", f64(p.rot.data(), 3));
+  o.set("handPose", f64(p.handPose.data(), static_cast<size_t>(p.handPose.size())));
   o.set("betas", f64(p.betas.data(), static_cast<size_t>(p.betas.size())));
-  o.set("trans", f64(p.transl.data(), 3));
+  o.set("trans", f64(p.trans.data(), 3));
 }
 
 

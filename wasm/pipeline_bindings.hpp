@@ -98,7 +98,7 @@ val handToJs(const hawor::PipelineHand<double>& h, const hawor::HandModel<double
   o.set("infilled", toTyped(h.infilled.data(), h.infilled.size(), "Uint8Array"));
   o.set("trans", seqToJs(h.world.trans));
   o.set("rot", seqToJs(h.world.rot));
-  o.set("handPose", seqToJs(h.world.hand_pose));
+  o.set("handPose", seqToJs(h.world.handPose));
   o.set("betas", seqToJs(h.world.betas));
   o.set("jointsWorld", seqToJs(h.jointsWorld));
   return o;

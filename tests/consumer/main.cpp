@@ -74,9 +74,9 @@ int main(int argc, char** argv) {
     hawor::HandOutput<double> rest, posed;
     hawor::HandPose<double> pose = hawor::HandPose<double>::zero(model);
     hawor::forward(model, pose, ws, rest);
-    for (int j = 0; j + 1 < model.numJoints(); ++j) pose.jointPose.row(j) << 0.3, 0.0, 0.1;
-    pose.globalOrient = w;
-    pose.transl = hawor::Vec3<double>(0.05, -0.02, 0.4);
+    for (int j = 0; j + 1 < model.numJoints(); ++j) pose.handPose.row(j) << 0.3, 0.0, 0.1;
+    pose.rot = w;
+    pose.trans = hawor::Vec3<double>(0.05, -0.02, 0.4);
     hawor::forward(model, pose, ws, posed);
     check(posed.vertices.rows() == model.numVertices() && posed.vertices.allFinite(), "posed vertices are finite");
     const double boneErr = (boneLengths(model, posed.joints) - boneLengths(model, rest.joints)).cwiseAbs().maxCoeff();

@@ -74,15 +74,15 @@ hawor::HandPose<Scalar> randomHandPose(const hawor::HandModel<Scalar>& m, const 
                                        Rng& rng, double fraction = 0.8) {
   auto uni = [](Rng& r) { return hawor::uniform01(r); };
   hawor::HandPose<Scalar> p = hawor::HandPose<Scalar>::zero(m);
-  p.jointPose = hawor::sampleJointPose(lim, rng, fraction);
-  p.globalOrient = randomRotation<Scalar>(rng);
+  p.handPose = hawor::sampleJointPose(lim, rng, fraction);
+  p.rot = randomRotation<Scalar>(rng);
   for (int b = 0; b < p.betas.size(); ++b) p.betas(b) = static_cast<Scalar>(-1.5 + 3.0 * uni(rng));
   const double z = 0.3 + 0.5 * uni(rng);
   const double x = (uni(rng) - 0.5) * 0.5 * z * 640.0 / 500.0;
   const double y = (uni(rng) - 0.5) * 0.5 * z * 480.0 / 500.0;
   // Place the wrist (J0(β) + transl) at (x, y, z).
   const hawor::HandOutput<Scalar> o = hawor::forward(m, p);
-  p.transl = hawor::Vec3<Scalar>(Scalar(x), Scalar(y), Scalar(z)) - o.joints.row(0).transpose();
+  p.trans = hawor::Vec3<Scalar>(Scalar(x), Scalar(y), Scalar(z)) - o.joints.row(0).transpose();
   return p;
 }
 

@@ -87,10 +87,10 @@ hawor::HandPose<Scalar> randomPose(const hawor::HandModel<Scalar>& m, unsigned s
   std::normal_distribution<double> g(0.0, 1.0);
   hawor::HandPose<Scalar> p = hawor::HandPose<Scalar>::zero(m);
   for (int c = 0; c < 3; ++c) {
-    p.globalOrient(c) = static_cast<Scalar>(sigma * g(rng));
-    p.transl(c) = static_cast<Scalar>(0.2 * g(rng));
+    p.rot(c) = static_cast<Scalar>(sigma * g(rng));
+    p.trans(c) = static_cast<Scalar>(0.2 * g(rng));
   }
-  for (Eigen::Index i = 0; i < p.jointPose.size(); ++i) p.jointPose.data()[i] = static_cast<Scalar>(sigma * g(rng));
+  for (Eigen::Index i = 0; i < p.handPose.size(); ++i) p.handPose.data()[i] = static_cast<Scalar>(sigma * g(rng));
   for (Eigen::Index i = 0; i < p.betas.size(); ++i) p.betas(i) = static_cast<Scalar>(g(rng));
   return p;
 }

@@ -120,11 +120,11 @@ TEST_CASE("hand ref: forward pass matches numpy (right, left, pkl, npz)", "[hand
       INFO("case " << i);
       auto hp = hawor::HandPose<double>::zero(model);
       for (int c3 = 0; c3 < 3; ++c3) {
-        hp.globalOrient(c3) = pose[i * 48 + c3];
-        hp.transl(c3) = transl[i * 3 + c3];
+        hp.rot(c3) = pose[i * 48 + c3];
+        hp.trans(c3) = transl[i * 3 + c3];
       }
       for (int j = 1; j < 16; ++j)
-        for (int c3 = 0; c3 < 3; ++c3) hp.jointPose(j - 1, c3) = pose[i * 48 + j * 3 + c3];
+        for (int c3 = 0; c3 < 3; ++c3) hp.handPose(j - 1, c3) = pose[i * 48 + j * 3 + c3];
       for (int k = 0; k < 10; ++k) hp.betas(k) = betas[i * 10 + k];
       hawor::forward(model, hp, ws, out);
       double dv = 0, dj = 0, dk = 0;

@@ -64,9 +64,9 @@ TEST_CASE("gltf ref: synthetic skinned files match numpy", "[hand][gltf][ref]") 
     // Posed: the forward pass equals glTF skinning of the raw file data.
     auto pose = hawor::HandPose<double>::zero(m);
     const hawor_test::RefArray& aa = ref[p + "pose"];
-    pose.globalOrient = hawor::Vec3<double>(aa[0], aa[1], aa[2]);
+    pose.rot = hawor::Vec3<double>(aa[0], aa[1], aa[2]);
     for (int j = 1; j < m.numJoints(); ++j) {
-      for (int c = 0; c < 3; ++c) pose.jointPose(j - 1, c) = aa[3 * j + c];
+      for (int c = 0; c < 3; ++c) pose.handPose(j - 1, c) = aa[3 * j + c];
     }
     CHECK(maxDiff(hawor::forward(m, pose).vertices, ref[p + "posed"]) < 1e-12);
   }

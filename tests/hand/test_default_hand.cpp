@@ -109,10 +109,10 @@ template <typename Scalar>
 hawor::HandOutput<Scalar> poseModel(const hawor::HandModel<Scalar>& m, const std::vector<Eigen::Matrix3d>& R) {
   auto pose = hawor::HandPose<Scalar>::zero(m);
   const Eigen::AngleAxisd a0(R[0]);
-  pose.globalOrient = (a0.axis() * a0.angle()).cast<Scalar>();
+  pose.rot = (a0.axis() * a0.angle()).cast<Scalar>();
   for (int j = 1; j < m.numJoints(); ++j) {
     const Eigen::AngleAxisd a(R[static_cast<size_t>(j)]);
-    pose.jointPose.row(j - 1) = (a.axis() * a.angle()).transpose().cast<Scalar>();
+    pose.handPose.row(j - 1) = (a.axis() * a.angle()).transpose().cast<Scalar>();
   }
   return hawor::forward(m, pose);
 }

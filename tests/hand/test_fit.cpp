@@ -56,7 +56,7 @@ TEST_CASE("joint limits: roles and anatomical frames of the MANO-structured hand
     for (int s = 0; s < 3; ++s) {
       const int j = 1 + 3 * c + s;
       HandPose<double> p = HandPose<double>::zero(m);
-      p.jointPose.row(j - 1) = L.axisAngle(j, Eigen::Vector3d(0.3, 0, 0)).transpose();
+      p.handPose.row(j - 1) = L.axisAngle(j, Eigen::Vector3d(0.3, 0, 0)).transpose();
       const HandOutput<double> o = forward(m, p);
       INFO("joint " << j);
       CHECK(o.keypoints(tipKp[c], 1) < rest.keypoints(tipKp[c], 1) - 1e-3);
@@ -68,7 +68,7 @@ TEST_CASE("joint limits: roles and anatomical frames of the MANO-structured hand
   const JointLimits<double> LL = JointLimits<double>::fromModel(left);
   const HandOutput<double> lrest = forward(left, HandPose<double>::zero(left));
   HandPose<double> p = HandPose<double>::zero(left);
-  p.jointPose.row(4 - 1) = LL.axisAngle(4, Eigen::Vector3d(0.3, 0, 0)).transpose();
+  p.handPose.row(4 - 1) = LL.axisAngle(4, Eigen::Vector3d(0.3, 0, 0)).transpose();
   CHECK(forward(left, p).keypoints(12, 1) < lrest.keypoints(12, 1) - 1e-3);
 }
 
@@ -114,14 +114,14 @@ TEMPLATE_TEST_CASE("hand fit: initialisation with exact data recovers rotation a
   std::mt19937 rng(17);
   for (int rep = 0; rep < 5; ++rep) {
     HandPose<S> truth = fit_test::randomHandPose(m, fitter.limits(), rng);
-    truth.jointPose.setZero();  // rigid hand: the initialisation alone is exact
+    truth.handPose.setZero();  // rigid hand: the initialisation alone is exact
     truth.betas.setZero();
     const HandObservation<S> obs = fit_test::observe(m, truth, cam, rng);
     const HandPose<S> init = fitter.initialise(obs, cam);
     const double tol = isFloat<S>() ? 2e-4 : 1e-8;
-    CHECK((axisAngleToMatrix(init.globalOrient) - axisAngleToMatrix(truth.globalOrient)).norm() <= tol);
-    CHECK((init.transl - truth.transl).norm() <= tol);
-    CHECK(init.jointPose.cwiseAbs().maxCoeff() <= (isFloat<S>() ? 1e-3 : 1e-6));
+    CHECK((axisAngleToMatrix(init.rot) - axisAngleToMatrix(truth.rot)).norm() <= tol);
+    CHECK((init.trans - truth.trans).norm() <= tol);
+    CHECK(init.handPose.cwiseAbs().maxCoeff() <= (isFloat<S>() ? 1e-3 : 1e-6));
   }
   // Articulated hand: the swing IK starts every bone close to the truth.
   for (int rep = 0; rep < 5; ++rep) {
@@ -150,7 +150,7 @@ TEMPLATE_TEST_CASE("hand fit: noise-free data is fitted exactly (MANO-structured
     INFO("rep " << rep << " iterations " << r.iterations << " rms " << r.reprojRmsPx);
     CHECK(fit_test::maxPointError(r.keypoints, gt.keypoints) <= (isFloat<S>() ? 5e-4 : 1e-6));
     CHECK(r.reprojRmsPx <= (isFloat<S>() ? 0.05 : 1e-4));
-    CHECK((r.pose.transl - truth.transl).norm() <= (isFloat<S>() ? 1e-3 : 1e-6));
+    CHECK((r.pose.trans - truth.trans).norm() <= (isFloat<S>() ? 1e-3 : 1e-6));
     CHECK(r.converged);
   }
 }
@@ -251,8 +251,8 @@ TEMPLATE_TEST_CASE("hand fit: warm start over a smooth sequence", "[hand][fit]",
   const HandPose<S> a = fit_test::randomHandPose(m, fitter.limits(), rng, 0.6);
   HandPose<S> b = fit_test::randomHandPose(m, fitter.limits(), rng, 0.6);
   b.betas = a.betas;
-  b.globalOrient = a.globalOrient + Vec3<S>(S(0.3), S(-0.2), S(0.25));
-  b.transl = a.transl + Vec3<S>(S(0.05), S(-0.03), S(0.1));
+  b.rot = a.rot + Vec3<S>(S(0.3), S(-0.2), S(0.25));
+  b.trans = a.trans + Vec3<S>(S(0.05), S(-0.03), S(0.1));
   HandFitOptions<S> opt;
   opt.sigmaPx = S(1);
   opt.sigma3d = S(0.002);  // matched to the landmark noise below: the size (hence depth) comes from it
@@ -263,9 +263,9 @@ TEMPLATE_TEST_CASE("hand fit: warm start over a smooth sequence", "[hand][fit]",
   for (int f = 0; f < frames; ++f) {
     const S u = S(f) / S(frames - 1);
     HandPose<S> truth = a;
-    truth.globalOrient = (S(1) - u) * a.globalOrient + u * b.globalOrient;
-    truth.transl = (S(1) - u) * a.transl + u * b.transl;
-    truth.jointPose = (S(1) - u) * a.jointPose + u * b.jointPose;
+    truth.rot = (S(1) - u) * a.rot + u * b.rot;
+    truth.trans = (S(1) - u) * a.trans + u * b.trans;
+    truth.handPose = (S(1) - u) * a.handPose + u * b.handPose;
     const HandObservation<S> obs = fit_test::observe(m, truth, cam, rng, 1.0, 0.001);
     const HandFitResult<S> r = fitter.fit(obs, cam, opt, f == 0 ? nullptr : &prev);
     if (f > 0) {
@@ -295,9 +295,9 @@ TEST_CASE("hand fit: a bad previous frame triggers a cold retry", "[hand][fit]")
   const HandPose<double> truth = fit_test::randomHandPose(m, fitter.limits(), rng);
   const HandObservation<double> obs = fit_test::observe(m, truth, cam, rng, 1.0, 0.003);
   HandPose<double> wrong = truth;
-  wrong.globalOrient = matrixToAxisAngle(Eigen::Matrix3d(axisAngleToMatrix(Eigen::Vector3d(3.0, 0, 0)) *
-                                                         axisAngleToMatrix(truth.globalOrient)));
-  wrong.transl(0) += 0.3;
+  wrong.rot = matrixToAxisAngle(Eigen::Matrix3d(axisAngleToMatrix(Eigen::Vector3d(3.0, 0, 0)) *
+                                                         axisAngleToMatrix(truth.rot)));
+  wrong.trans(0) += 0.3;
   HandFitOptions<double> opt;
   opt.sigmaTemporalRot = 0;  // a wrong previous frame must not hold the solution back
   opt.sigmaTemporalTransl = 0;
@@ -356,7 +356,7 @@ TEST_CASE("hand fit: bad input throws hawor::Error", "[hand][fit]") {
   c0.fy = -1;
   CHECK_THROWS_AS(fitter.fit(obs, c0), Error);
   HandPose<double> badPrev = truth;
-  badPrev.jointPose.conservativeResize(3, 3);
+  badPrev.handPose.conservativeResize(3, 3);
   CHECK_THROWS_AS(fitter.fit(obs, cam, {}, &badPrev), Error);
   HandModel<double> unprepared;
   CHECK_THROWS_AS(HandFitter<double>(unprepared), Error);

@@ -78,10 +78,10 @@ void checkKeypointJacobian(const HandModel<double>& m, const Params& p) {
   evaluateHandKeypoints(km, Mat3<double>(p.R0), p.w, p.beta, Vec3<double>(p.t), ws, kp, &Jac);
   // The keypoints agree with the full forward pass.
   HandPose<double> pose = HandPose<double>::zero(m);
-  pose.globalOrient = matrixToAxisAngle(p.R0);
-  pose.jointPose = p.w;
+  pose.rot = matrixToAxisAngle(p.R0);
+  pose.handPose = p.w;
   pose.betas = p.beta;
-  pose.transl = p.t;
+  pose.trans = p.t;
   const HandOutput<double> out = forward(m, pose);
   CHECK(fit_test::maxPointError(kp, out.keypoints) < 1e-12);
   const HandParamLayout& L = km.layout;
@@ -161,14 +161,14 @@ void checkEnergyJacobian(const HandModel<double>& m, unsigned seed, bool withPre
   o2.confidence2d(4) = 0.0;
   HandPose<double> at = truth;
   auto g = [](std::mt19937& r) { return standardNormal(r); };
-  for (Eigen::Index i = 0; i < at.jointPose.size(); ++i) at.jointPose.data()[i] += 0.4 * g(rng);
+  for (Eigen::Index i = 0; i < at.handPose.size(); ++i) at.handPose.data()[i] += 0.4 * g(rng);
   for (Eigen::Index i = 0; i < at.betas.size(); ++i) at.betas(i) += 0.3 * g(rng);
-  at.globalOrient += Eigen::Vector3d(0.1, -0.2, 0.05);
-  at.transl += Eigen::Vector3d(0.01, 0.02, -0.03);
+  at.rot += Eigen::Vector3d(0.1, -0.2, 0.05);
+  at.trans += Eigen::Vector3d(0.01, 0.02, -0.03);
   HandPose<double> prev = truth;
-  prev.globalOrient += Eigen::Vector3d(-0.3, 0.1, 0.2);
-  prev.transl += Eigen::Vector3d(0.02, 0.0, 0.01);
-  for (Eigen::Index i = 0; i < prev.jointPose.size(); ++i) prev.jointPose.data()[i] += 0.2 * g(rng);
+  prev.rot += Eigen::Vector3d(-0.3, 0.1, 0.2);
+  prev.trans += Eigen::Vector3d(0.02, 0.0, 0.01);
+  for (Eigen::Index i = 0; i < prev.handPose.size(); ++i) prev.handPose.data()[i] += 0.2 * g(rng);
   for (Eigen::Index i = 0; i < prev.betas.size(); ++i) prev.betas(i) -= 0.2;
   HandFitOptions<double> opt;
   opt.loss = RobustLoss::None;  // IRLS weights are frozen in the Jacobian: compare without them
@@ -184,11 +184,11 @@ void checkEnergyJacobian(const HandModel<double>& m, unsigned seed, bool withPre
     if (i < 3) {
       Eigen::Vector3d d = Eigen::Vector3d::Zero();
       d(i) = s;
-      q.globalOrient = matrixToAxisAngle(axisAngleToMatrix(at.globalOrient) * axisAngleToMatrix(d));
+      q.rot = matrixToAxisAngle(axisAngleToMatrix(at.rot) * axisAngleToMatrix(d));
     } else if (i < 6) {
-      q.transl(i - 3) += s;
+      q.trans(i - 3) += s;
     } else if (i < L.betas()) {
-      q.jointPose((i - 6) / 3, (i - 6) % 3) += s;
+      q.handPose((i - 6) / 3, (i - 6) % 3) += s;
     } else {
       q.betas(i - L.betas()) += s;
     }
@@ -196,7 +196,7 @@ void checkEnergyJacobian(const HandModel<double>& m, unsigned seed, bool withPre
   };
   int active = 0;
   for (int j = 1; j < m.numJoints(); ++j)
-    if (fitter.limits().limited(j)) active += (fitter.limits().violation(j, at.jointPose.row(j - 1).transpose()).array() != 0.0).count();
+    if (fitter.limits().limited(j)) active += (fitter.limits().violation(j, at.handPose.row(j - 1).transpose()).array() != 0.0).count();
   INFO("active limit residuals " << active);
   CHECK(active > 0);
   for (int i = 0; i < L.size(); ++i) {
@@ -233,7 +233,7 @@ TEST_CASE("hand fit normal equations: H = JᵀJ and g = Jᵀr with IRLS weights"
   obs.keypoints2d(5, 0) += 40;  // an outlier: a small IRLS weight
   obs.confidence3d(7) = 0.0;
   HandPose<double> prev = truth;
-  prev.transl(2) += 0.02;
+  prev.trans(2) += 0.02;
   for (RobustLoss loss : {RobustLoss::None, RobustLoss::Huber, RobustLoss::Cauchy}) {
     for (bool fitShape : {true, false}) {
       HandFitOptions<double> opt;

@@ -75,11 +75,11 @@ TEMPLATE_TEST_CASE("hand forward: translation shifts every output", "[hand][forw
   using S = TestType;
   const auto m = hand_test::randomModel<S>();
   auto p = hand_test::randomPose(m, 3);
-  p.transl.setZero();
+  p.trans.setZero();
   const auto a = hawor::forward(m, p);
-  p.transl = hawor::Vec3<S>(S(0.3), S(-1.2), S(2.5));
+  p.trans = hawor::Vec3<S>(S(0.3), S(-1.2), S(2.5));
   const auto b = hawor::forward(m, p);
-  const Eigen::Matrix<S, 1, 3> t = p.transl.transpose();
+  const Eigen::Matrix<S, 1, 3> t = p.trans.transpose();
   CHECK(fwdMaxAbs(b.vertices, a.vertices.rowwise() + t) <= 4 * fwdTol<S>());
   CHECK(fwdMaxAbs(b.joints, a.joints.rowwise() + t) <= 4 * fwdTol<S>());
   CHECK(fwdMaxAbs(b.keypoints, a.keypoints.rowwise() + t) <= 4 * fwdTol<S>());
@@ -89,14 +89,14 @@ TEMPLATE_TEST_CASE("hand forward: global orientation rotates about joint 0", "[h
   using S = TestType;
   const auto m = hand_test::randomModel<S>();
   auto p = hand_test::randomPose(m, 4);
-  p.transl.setZero();
-  p.globalOrient.setZero();
+  p.trans.setZero();
+  p.rot.setZero();
   const auto a = hawor::forward(m, p);
-  p.globalOrient = hawor::Vec3<S>(S(0.4), S(-1.1), S(2.0));
+  p.rot = hawor::Vec3<S>(S(0.4), S(-1.1), S(2.0));
   const auto b = hawor::forward(m, p);
   // Joint 0 stays where it was; everything else is rotated about it (correctives ignore joint 0).
   CHECK(fwdMaxAbs(b.joints.row(0), a.joints.row(0)) <= fwdTol<S>());
-  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.globalOrient);
+  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.rot);
   const Eigen::Matrix<S, 1, 3> j0 = a.joints.row(0);
   const hawor::Points3<S> expect = ((a.vertices.rowwise() - j0) * R.transpose()).rowwise() + j0;
   CHECK(fwdMaxAbs(b.vertices, expect) <= 4 * fwdTol<S>());
@@ -108,15 +108,15 @@ TEMPLATE_TEST_CASE("hand forward: without finger pose the hand moves rigidly", "
   // Rows of the skinning weights sum to 1, so equal joint transforms move every vertex by them.
   for (int v = 0; v < m.numVertices(); ++v) REQUIRE(std::abs(double(m.weights.row(v).sum()) - 1.0) < 1e-5);
   auto p = hand_test::randomPose(m, 5);
-  p.jointPose.setZero();
+  p.handPose.setZero();
   const auto out = hawor::forward(m, p);
   auto rest = hawor::HandPose<S>::zero(m);
   rest.betas = p.betas;
   const auto shaped = hawor::forward(m, rest);
-  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.globalOrient);
+  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.rot);
   const Eigen::Matrix<S, 1, 3> j0 = shaped.joints.row(0);
   const hawor::Points3<S> expect =
-      (((shaped.vertices.rowwise() - j0) * R.transpose()).rowwise() + j0).rowwise() + p.transl.transpose();
+      (((shaped.vertices.rowwise() - j0) * R.transpose()).rowwise() + j0).rowwise() + p.trans.transpose();
   CHECK(fwdMaxAbs(out.vertices, expect) <= 4 * fwdTol<S>());
   // Distances between vertices are preserved.
   for (int k = 0; k < 50; ++k) {
@@ -135,9 +135,9 @@ TEMPLATE_TEST_CASE("hand forward: kinematic chain and skinning locality", "[hand
   auto p = hawor::HandPose<S>::zero(m);
   const auto rest = hawor::forward(m, p);
   // Rotate the index base (joint 1): joints 2, 3 turn about joint 1, nothing else moves.
-  p.jointPose.row(0) << S(0.3), S(-0.5), S(0.8);
+  p.handPose.row(0) << S(0.3), S(-0.5), S(0.8);
   const auto out = hawor::forward(m, p);
-  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.jointPose.row(0).transpose());
+  const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.handPose.row(0).transpose());
   for (int j = 0; j < 16; ++j) {
     hawor::Vec3<S> expect = rest.joints.row(j).transpose();
     if (j == 2 || j == 3) {
@@ -172,12 +172,12 @@ TEMPLATE_TEST_CASE("hand forward: pose correctives use row-major (R - I) feature
   m.weights.col(0).setOnes();
   m.prepare();
   auto p = hand_test::randomPose(m, 6);
-  p.globalOrient.setZero();
-  p.transl.setZero();
+  p.rot.setZero();
+  p.trans.setZero();
   const auto out = hawor::forward(m, p);
   hawor::VecX<S> f(9 * 15);
   for (int j = 1; j < 16; ++j) {
-    const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.jointPose.row(j - 1).transpose());
+    const hawor::Mat3<S> R = hawor::axisAngleToMatrix(p.handPose.row(j - 1).transpose());
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) f(9 * (j - 1) + 3 * r + c) = R(r, c) - (r == c ? S(1) : S(0));
   }
@@ -205,9 +205,9 @@ TEMPLATE_TEST_CASE("hand forward: split stages, reuse and errors", "[hand][forwa
   CHECK(out.vertices.data() == vbuf);
   hawor::shapeHand(m, p.betas, ws);
   std::vector<hawor::Mat3<S>> rot(16);
-  rot[0] = hawor::axisAngleToMatrix(p.globalOrient);
-  for (int j = 1; j < 16; ++j) rot[static_cast<std::size_t>(j)] = hawor::axisAngleToMatrix(p.jointPose.row(j - 1).transpose());
-  hawor::poseHand(m, rot.data(), p.transl, ws, out);
+  rot[0] = hawor::axisAngleToMatrix(p.rot);
+  for (int j = 1; j < 16; ++j) rot[static_cast<std::size_t>(j)] = hawor::axisAngleToMatrix(p.handPose.row(j - 1).transpose());
+  hawor::poseHand(m, rot.data(), p.trans, ws, out);
   CHECK(fwdMaxAbs(out.vertices, once.vertices) == 0.0);
 
   // Batch of frames = frame by frame (up to the summation order of the corrective product).
@@ -224,7 +224,7 @@ TEMPLATE_TEST_CASE("hand forward: split stages, reuse and errors", "[hand][forwa
     CHECK(fwdMaxAbs(outs[k].keypoints, single.keypoints) <= 4 * fwdTol<S>());
   }
   hawor::forwardBatch(m, poses.data(), 0, bws, outs.data());
-  poses[3].jointPose(2, 2) = std::numeric_limits<S>::quiet_NaN();
+  poses[3].handPose(2, 2) = std::numeric_limits<S>::quiet_NaN();
   CHECK_THROWS_AS(hawor::forwardBatch(m, poses.data(), 5, bws, outs.data()), hawor::Error);
 
   hawor::HandModel<S> raw = m;
@@ -233,14 +233,14 @@ TEMPLATE_TEST_CASE("hand forward: split stages, reuse and errors", "[hand][forwa
   hawor::HandModel<S> fresh;
   CHECK_THROWS_AS(hawor::forward(fresh, p), hawor::Error);
   auto bad = p;
-  bad.jointPose.resize(14, 3);
+  bad.handPose.resize(14, 3);
   CHECK_THROWS_AS(hawor::forward(m, bad), hawor::Error);
   bad = p;
   bad.betas.resize(11);
   bad.betas.setZero();
   CHECK_THROWS_AS(hawor::forward(m, bad), hawor::Error);
   bad = p;
-  bad.globalOrient(1) = std::numeric_limits<S>::quiet_NaN();
+  bad.rot(1) = std::numeric_limits<S>::quiet_NaN();
   CHECK_THROWS_AS(hawor::forward(m, bad), hawor::Error);
   bad = p;
   bad.betas(2) = std::numeric_limits<S>::infinity();
@@ -252,15 +252,15 @@ TEMPLATE_TEST_CASE("hand forward: split stages, reuse and errors", "[hand][forwa
   CHECK_NOTHROW(hawor::forward(m, p3));
   CHECK_THROWS_WITH(hawor::forward(edited, p3), Catch::Contains("changed since prepare"));
   hawor::HandWorkspace<S> unshaped;
-  CHECK_THROWS_AS(hawor::poseHand(m, rot.data(), p.transl, unshaped, out), hawor::Error);
+  CHECK_THROWS_AS(hawor::poseHand(m, rot.data(), p.trans, unshaped, out), hawor::Error);
   // float agrees with double.
   if (std::is_same<S, float>::value) {
     const auto md = hawor::castHandModel<double>(m);
     hawor::HandPose<double> pd;
-    pd.globalOrient = p.globalOrient.template cast<double>();
-    pd.jointPose = p.jointPose.template cast<double>();
+    pd.rot = p.rot.template cast<double>();
+    pd.handPose = p.handPose.template cast<double>();
     pd.betas = p.betas.template cast<double>();
-    pd.transl = p.transl.template cast<double>();
+    pd.trans = p.trans.template cast<double>();
     CHECK(fwdMaxAbs(hawor::forward(md, pd).vertices, once.vertices) < 1e-4);
   }
 }
@@ -404,9 +404,9 @@ TEMPLATE_TEST_CASE("hand mirror: left(mirrorPose(p)) = M right(p)", "[hand][mirr
   // Mirroring twice is the identity.
   const auto p = hand_test::randomPose(right, 20);
   const auto pp = hawor::mirrorPose(hawor::mirrorPose(p));
-  CHECK(fwdMaxAbs(pp.jointPose, p.jointPose) == 0.0);
-  CHECK(fwdMaxAbs(pp.globalOrient, p.globalOrient) == 0.0);
-  CHECK(fwdMaxAbs(pp.transl, p.transl) == 0.0);
+  CHECK(fwdMaxAbs(pp.handPose, p.handPose) == 0.0);
+  CHECK(fwdMaxAbs(pp.rot, p.rot) == 0.0);
+  CHECK(fwdMaxAbs(pp.trans, p.trans) == 0.0);
   const auto back = hawor::mirrorHandModel(left);
   CHECK(fwdMaxAbs(back.posedirs, right.posedirs) == 0.0);
   CHECK((back.faces.array() == right.faces.array()).all());

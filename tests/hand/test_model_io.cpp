@@ -70,7 +70,7 @@ TEMPLATE_TEST_CASE("model io: a MANO-sized model round-trips exactly", "[hand][m
     // The forward pass of the loaded model is that of the original.
     auto pose = hawor::HandPose<S>::zero(m);
     pose.betas.setConstant(S(0.5));
-    pose.jointPose.setConstant(S(0.2));
+    pose.handPose.setConstant(S(0.2));
     CHECK(same(hawor::forward(m, pose).vertices, hawor::forward(back, pose).vertices));
   }
   // Stored arrays keep the model's precision; a float model reads back as double exactly.

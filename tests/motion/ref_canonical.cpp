@@ -12,7 +12,7 @@ TEST_CASE("camera -> world -> canonical matches the numpy reference", "[motion][
   hawor::HandMotion<double> cam;
   cam.rot = toSeq(ref["rot_c"]);
   cam.trans = toSeq(ref["trans_c"]);
-  cam.hand_pose = toSeq(ref["pose"]);
+  cam.handPose = toSeq(ref["pose"]);
   cam.betas = toSeq(ref["betas"]);
   cam.valid = hawor_test::toMask(ref["valid"]);
   const Eigen::Index T = cam.frames();

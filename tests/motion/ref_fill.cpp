@@ -43,12 +43,12 @@ TEST_CASE("gap fills match the numpy/scipy reference", "[motion][sequence][ref]"
   hawor::HandMotion<double> m;
   m.rot = toSeq(ref["h_rot"]);
   m.trans = toSeq(ref["h_trans"]);
-  m.hand_pose = toSeq(ref["h_pose"]);
+  m.handPose = toSeq(ref["h_pose"]);
   m.betas = toSeq(ref["h_betas"]);
   m.valid = valid;
   const auto f = hawor::fillInterpolate(m);
   CHECK(maxRotDiff(f.rot, toSeq(ref["h_rot_fill"])) < 1e-12);
   CHECK(maxAbs(f.trans, toSeq(ref["h_trans_fill"])) < 1e-12);
-  CHECK(maxRotDiff(f.hand_pose, toSeq(ref["h_pose_fill"])) < 1e-12);
+  CHECK(maxRotDiff(f.handPose, toSeq(ref["h_pose_fill"])) < 1e-12);
   CHECK(maxAbs(f.betas, toSeq(ref["h_betas_fill"])) < 1e-12);
 }

@@ -24,7 +24,7 @@ hawor::HandMotion<S> randomHand(Eigen::Index T, unsigned seed) {
   auto m = hawor::HandMotion<S>::zeros(T);
   m.rot = hawor::Sequence<S>::Random(T, 3) * S(2.5);
   m.trans = hawor::Sequence<S>::Random(T, 3) * S(0.3);
-  m.hand_pose = hawor::Sequence<S>::Random(T, 45);
+  m.handPose = hawor::Sequence<S>::Random(T, 45);
   m.betas = hawor::Sequence<S>::Random(T, 10);
   return m;
 }
@@ -81,7 +81,7 @@ TEMPLATE_TEST_CASE("transformHandFrame moves every point of the hand rigidly",
     const hawor::Vec3<S> expect = R * handPoint(before, 2, J0, x) + p;
     CHECK((handPoint(m, 2, J0, x) - expect).norm() < tol<S>());
   }
-  CHECK(m.hand_pose == before.hand_pose);
+  CHECK(m.handPose == before.handPose);
   CHECK(m.betas == before.betas);
   CHECK(m.rot.row(1) == before.rot.row(1));
 }
@@ -92,8 +92,8 @@ TEMPLATE_TEST_CASE("HandMotion::validate names the bad field", "[motion][canonic
   auto m = randomHand<S>(6, 2);
   CHECK_NOTHROW(m.validate());
   auto a = m;
-  a.hand_pose = hawor::Sequence<S>::Zero(6, 44);
-  CHECK_THROWS_WITH(a.validate(), Catch::Contains("hand_pose"));
+  a.handPose = hawor::Sequence<S>::Zero(6, 44);
+  CHECK_THROWS_WITH(a.validate(), Catch::Contains("handPose"));
   auto b = m;
   b.valid.pop_back();
   CHECK_THROWS_AS(b.validate(), hawor::Error);
@@ -132,7 +132,7 @@ TEMPLATE_TEST_CASE("camera -> world follows the cam2world root/offset rule", "[m
         (handPoint(w, i, j0, x) - (R[size_t(i)] * handPoint(cam, i, j0, x) + t[size_t(i)])).norm() <
         tol<S>());
   }
-  CHECK(w.hand_pose == cam.hand_pose);
+  CHECK(w.handPose == cam.handPose);
   CHECK(w.valid == cam.valid);
   // errors
   std::vector<hawor::Vec3<S>> short_t(t.begin(), t.end() - 1);
@@ -163,7 +163,7 @@ TEMPLATE_TEST_CASE("world -> canonical: first valid frame is identity / zero; ro
       CHECK((back.trans.row(i) - world.trans.row(i)).norm() < tol<S>());
       CHECK(rotDistance(back.rot, world.rot, i) < tol<S>());
     }
-    CHECK(back.hand_pose == world.hand_pose);
+    CHECK(back.handPose == world.handPose);
     CHECK(back.betas == world.betas);
     // rigid: relative geometry between frames is kept
     const hawor::Vec3<S> x(S(0.03), S(0.01), S(-0.02));
@@ -248,7 +248,7 @@ TEMPLATE_TEST_CASE("pre-fill of a HandMotion", "[motion][prefill]", float, doubl
   for (Eigen::Index i = 0; i < T; ++i) {
     if (!m.valid[size_t(i)]) continue;
     CHECK(std::memcmp(f.rot.row(i).data(), m.rot.row(i).data(), 3 * sizeof(S)) == 0);
-    CHECK(std::memcmp(f.hand_pose.row(i).data(), m.hand_pose.row(i).data(), 45 * sizeof(S)) == 0);
+    CHECK(std::memcmp(f.handPose.row(i).data(), m.handPose.row(i).data(), 45 * sizeof(S)) == 0);
     CHECK(std::memcmp(l.trans.row(i).data(), m.trans.row(i).data(), 3 * sizeof(S)) == 0);
   }
   // betas and trans: LERP; rotations: SLERP per joint
@@ -257,16 +257,16 @@ TEMPLATE_TEST_CASE("pre-fill of a HandMotion", "[motion][prefill]", float, doubl
   CHECK((f.trans.row(3) - (m.trans.row(2) + S(0.25) * (m.trans.row(6) - m.trans.row(2)))).norm() <
         tol<S>());
   for (Eigen::Index k = 0; k < 45; k += 3) {
-    const hawor::Vec3<S> a = m.hand_pose.row(7).segment(k, 3).transpose();
-    const hawor::Vec3<S> b = m.hand_pose.row(9).segment(k, 3).transpose();
+    const hawor::Vec3<S> a = m.handPose.row(7).segment(k, 3).transpose();
+    const hawor::Vec3<S> b = m.handPose.row(9).segment(k, 3).transpose();
     const hawor::Vec3<S> e = hawor::slerpAxisAngle(a, b, S(0.5));
-    CHECK((f.hand_pose.row(8).segment(k, 3).transpose() - e).norm() < tol<S>());
+    CHECK((f.handPose.row(8).segment(k, 3).transpose() - e).norm() < tol<S>());
   }
   CHECK(f.rot.row(0) == m.rot.row(1));
   CHECK(f.trans.row(11) == m.trans.row(9));
   CHECK(l.rot.row(5) == m.rot.row(2));
   CHECK(l.betas.row(8) == m.betas.row(7));
-  CHECK(l.hand_pose.row(0) == m.hand_pose.row(1));
+  CHECK(l.handPose.row(0) == m.handPose.row(1));
   auto none = m;
   none.valid.assign(size_t(T), 0);
   CHECK_THROWS_AS(hawor::fillInterpolate(none), hawor::Error);

@@ -47,7 +47,7 @@ void poisonMissing(hawor::HandMotion<S>& m) {
     if (m.valid[static_cast<size_t>(t)]) continue;
     m.rot.row(t).setConstant(nan);
     m.trans.row(t).setConstant(nan);
-    m.hand_pose.row(t).setConstant(nan);
+    m.handPose.row(t).setConstant(nan);
     m.betas.row(t).setConstant(nan);
   }
 }
@@ -61,7 +61,7 @@ hawor::HandMotion<S> smoothHand(Index T, Index K, Index B, unsigned seed) {
   hawor::HandMotion<S> m;
   m.rot.resize(T, 3);
   m.trans.resize(T, 3);
-  m.hand_pose.resize(T, 3 * K);
+  m.handPose.resize(T, 3 * K);
   m.betas.resize(T, B);
   auto wave = [&](hawor::Sequence<S>& q, Index c, double amp) {
     const double p1 = 40 + 110 * U(rng), p2 = 40 + 110 * U(rng), f1 = 6.28 * U(rng), f2 = 6.28 * U(rng);
@@ -71,7 +71,7 @@ hawor::HandMotion<S> smoothHand(Index T, Index K, Index B, unsigned seed) {
   };
   for (Index c = 0; c < 3; ++c) wave(m.trans, c, 0.2);
   for (Index c = 0; c < 3; ++c) wave(m.rot, c, 0.7);
-  for (Index c = 0; c < 3 * K; ++c) wave(m.hand_pose, c, 0.3);
+  for (Index c = 0; c < 3 * K; ++c) wave(m.handPose, c, 0.3);
   for (Index c = 0; c < B; ++c)
     for (Index t = 0; t < T; ++t) m.betas(t, c) = S(0.5 - 0.01 * double(c) + 1e-3 * double(t));
   m.valid.assign(static_cast<size_t>(T), 1);
@@ -87,7 +87,7 @@ bool rowsBitEqual(const hawor::Sequence<S>& a, const hawor::Sequence<S>& b, Inde
 template <typename S>
 bool framesBitEqual(const hawor::HandMotion<S>& a, const hawor::HandMotion<S>& b, Index t) {
   return rowsBitEqual(a.rot, b.rot, t) && rowsBitEqual(a.trans, b.trans, t) &&
-         rowsBitEqual(a.hand_pose, b.hand_pose, t) && rowsBitEqual(a.betas, b.betas, t);
+         rowsBitEqual(a.handPose, b.handPose, t) && rowsBitEqual(a.betas, b.betas, t);
 }
 
 template <typename S>
@@ -126,7 +126,7 @@ TEMPLATE_TEST_CASE("spline: linear translation and constant angular velocity are
       const hawor::Vec3<S> r0(S(0.05) * S(j), S(-0.3), S(0.1));
       const hawor::Vec3<S> wj = S(t) * S(0.1 * double(j + 1)) * hawor::Vec3<S>(w(1), w(2), w(0));
       const hawor::Mat3<S> Rj = hawor::axisAngleToMatrix(r0) * hawor::axisAngleToMatrix(wj);
-      m.hand_pose.row(t).template segment<3>(3 * j) = hawor::matrixToAxisAngle(Rj).transpose();
+      m.handPose.row(t).template segment<3>(3 * j) = hawor::matrixToAxisAngle(Rj).transpose();
     }
   }
   const hawor::HandMotion<S> truth = m;
@@ -139,7 +139,7 @@ TEMPLATE_TEST_CASE("spline: linear translation and constant angular velocity are
     CHECK((f.trans.row(t) - truth.trans.row(t)).norm() < tol);
     CHECK((rotAt(f.rot, t) - rotAt(truth.rot, t)).norm() < tol);
   }
-  hawor::Sequence<S> pose_in = truth.hand_pose.middleRows(5, 390), pose_out = f.hand_pose.middleRows(5, 390);
+  hawor::Sequence<S> pose_in = truth.handPose.middleRows(5, 390), pose_out = f.handPose.middleRows(5, 390);
   CHECK(maxRotDiff(pose_in, pose_out) < tol);
   // the ends hold the nearest valid frame
   CHECK(rowsBitEqual(f.trans, m.trans, 5));
@@ -213,7 +213,7 @@ TEMPLATE_TEST_CASE("spline: observed frames are bit for bit untouched", "[motion
     } else {
       CHECK(f.rot.row(t).allFinite());
       CHECK(f.trans.row(t).allFinite());
-      CHECK(f.hand_pose.row(t).allFinite());
+      CHECK(f.handPose.row(t).allFinite());
       CHECK(f.betas.row(t).allFinite());
     }
   }
@@ -358,7 +358,7 @@ TEMPLATE_TEST_CASE("infillHand: no valid, one valid and all valid frames", "[mot
     for (Index t = 0; t < T; ++t) {
       CHECK((r.motion.trans.row(t) - m.trans.row(12)).norm() < tol);
       CHECK((rotAt(r.motion.rot, t) - rotAt(m.rot, 12)).norm() < tol);
-      CHECK((r.motion.hand_pose.row(t) - m.hand_pose.row(12)).norm() < S(10) * tol);
+      CHECK((r.motion.handPose.row(t) - m.handPose.row(12)).norm() < S(10) * tol);
       CHECK((r.motion.betas.row(t) - m.betas.row(12)).norm() < tol);
       CHECK(bool(r.filled[size_t(t)]) == (t != 12));
     }
@@ -389,7 +389,7 @@ TEMPLATE_TEST_CASE("infillHand equals the world-space fills (canonical round tri
   auto r = hawor::infillHand(m, J0, o);
   auto w = hawor::fillInterpolate(m);
   CHECK(maxRotDiff(r.motion.rot, w.rot) < tol);
-  CHECK(maxRotDiff(r.motion.hand_pose, w.hand_pose) < tol);
+  CHECK(maxRotDiff(r.motion.handPose, w.handPose) < tol);
   CHECK((r.motion.betas - w.betas).norm() < tol);
   // trans: with a shape-dependent J0 the canonical LERP is of the root, not of trans, so compare
   // the root joints (trans + J0) of frames with a constant J0 nearby: use a constant J0 instead
@@ -401,7 +401,7 @@ TEMPLATE_TEST_CASE("infillHand equals the world-space fills (canonical round tri
   auto s = hawor::fillSpline(m);
   CHECK((r.motion.trans - s.trans).cwiseAbs().maxCoeff() < S(10) * tol);
   CHECK(maxRotDiff(r.motion.rot, s.rot) < S(10) * tol);
-  CHECK(maxRotDiff(r.motion.hand_pose, s.hand_pose) < S(10) * tol);
+  CHECK(maxRotDiff(r.motion.handPose, s.handPose) < S(10) * tol);
   o.method = hawor::InfillMethod::LastPose;
   r = hawor::infillHand(m, J0c, o);
   auto lp = hawor::fillLastPose(m);
@@ -416,8 +416,8 @@ TEMPLATE_TEST_CASE("infill: malformed input gives clear errors", "[motion][infil
   hawor::HandMotion<S> m = smoothHand<S>(T, 15, 10, 1);
   m.valid[5] = 0;
   auto a = m;
-  a.hand_pose = hawor::Sequence<S>::Zero(T, 44);
-  CHECK_THROWS_WITH(hawor::infillHand(a, J0), Catch::Contains("hand_pose"));
+  a.handPose = hawor::Sequence<S>::Zero(T, 44);
+  CHECK_THROWS_WITH(hawor::infillHand(a, J0), Catch::Contains("handPose"));
   auto b = m;
   b.valid.pop_back();
   CHECK_THROWS_WITH(hawor::infillHand(b, J0), Catch::Contains("validity mask"));
@@ -577,7 +577,7 @@ TEMPLATE_TEST_CASE("infillWindowed: windows, padding, canonical features, write-
         CHECK(framesBitEqual(out[size_t(h)], hands[size_t(h)], t));
       } else {
         CHECK(out[size_t(h)].betas.row(t).isApproxToConstant(S(0.25)));
-        CHECK(out[size_t(h)].hand_pose.row(t).norm() < tol);
+        CHECK(out[size_t(h)].handPose.row(t).norm() < tol);
       }
     }
   }
@@ -590,7 +590,7 @@ TEMPLATE_TEST_CASE("infillWindowed: windows, padding, canonical features, write-
   CHECK(std::isnan(double(out2[0].trans(3, 0))));
   // mismatched hands / bad output size
   auto bad = hands;
-  bad[1].hand_pose = hawor::Sequence<S>::Zero(T, 72);
+  bad[1].handPose = hawor::Sequence<S>::Zero(T, 72);
   CHECK_THROWS_WITH(hawor::infillWindowed(bad, j0, rec), Catch::Contains("differ"));
   rec.answer = hawor::Sequence<S>::Zero(1, 200);
   CHECK_THROWS(hawor::infillWindowed(hands, j0, rec));
@@ -618,12 +618,12 @@ TEMPLATE_TEST_CASE("infillWindowed with the spline window infiller matches the s
       const hawor::HandMotion<S> f = hawor::infillHand(part, J0).motion;
       ref.rot.middleRows(w0, 120) = f.rot;
       ref.trans.middleRows(w0, 120) = f.trans;
-      ref.hand_pose.middleRows(w0, 120) = f.hand_pose;
+      ref.handPose.middleRows(w0, 120) = f.handPose;
       ref.betas.middleRows(w0, 120) = f.betas;
     }
     CHECK((out[size_t(h)].trans - ref.trans).cwiseAbs().maxCoeff() < tol);
     CHECK(maxRotDiff(out[size_t(h)].rot, ref.rot) < tol);
-    CHECK(maxRotDiff(out[size_t(h)].hand_pose, ref.hand_pose) < tol);
+    CHECK(maxRotDiff(out[size_t(h)].handPose, ref.handPose) < tol);
     CHECK((out[size_t(h)].betas - ref.betas).cwiseAbs().maxCoeff() < tol);
   }
   // and close to the whole-sequence spline (same gaps, longer context for the noise estimate)
@@ -652,7 +652,7 @@ TEMPLATE_TEST_CASE("canonicalFrameAt: any origin frame; round trip", "[motion][i
     const hawor::HandMotion<S> back = hawor::canonicalToWorld(can, c, J0);
     CHECK((back.trans - m.trans).cwiseAbs().maxCoeff() < tol);
     CHECK(maxRotDiff(back.rot, m.rot) < tol);
-    CHECK(back.hand_pose == m.hand_pose);
+    CHECK(back.handPose == m.handPose);
   }
   CHECK_THROWS_WITH(hawor::canonicalFrameAt(m, J0, T), Catch::Contains("outside"));
   m.trans(5, 0) = std::numeric_limits<S>::quiet_NaN();
@@ -671,7 +671,7 @@ TEMPLATE_TEST_CASE("spline: given noise levels replace the estimates", "[motion]
   // the estimates themselves: same result as without
   const hawor::HandMotion<S> a = hawor::fillSpline(m), b = hawor::fillSpline(m, {}, &est);
   CHECK((a.trans - b.trans).cwiseAbs().maxCoeff() == S(0));
-  CHECK((a.hand_pose - b.hand_pose).cwiseAbs().maxCoeff() == S(0));
+  CHECK((a.handPose - b.handPose).cwiseAbs().maxCoeff() == S(0));
   // huge noise: every boundary deviation is shrunk away, the fill is the chord (LERP / SLERP)
   hawor::HandNoise<S> loud = est;
   loud.trans = S(10);
@@ -682,7 +682,7 @@ TEMPLATE_TEST_CASE("spline: given noise levels replace the estimates", "[motion]
   const S tol = tolOf<S>(1e-5, 1e-12);
   CHECK((c.trans - l.trans).cwiseAbs().maxCoeff() < tol);
   CHECK(maxRotDiff(c.rot, l.rot) < tol);
-  CHECK(maxRotDiff(c.hand_pose, l.hand_pose) < tol);
+  CHECK(maxRotDiff(c.handPose, l.handPose) < tol);
   hawor::HandNoise<S> wrong = est;
   wrong.joints.pop_back();
   CHECK_THROWS_WITH(hawor::fillSpline(m, {}, &wrong), Catch::Contains("noise levels"));

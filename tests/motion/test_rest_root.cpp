@@ -15,7 +15,7 @@ TEST_CASE("restRootJoints: joint 0 of the shaped rest hand, per frame", "[motion
   const int T = 5;
   mo.rot = hawor::Sequence<double>::Zero(T, 3);
   mo.trans = hawor::Sequence<double>::Zero(T, 3);
-  mo.hand_pose = hawor::Sequence<double>::Zero(T, 3 * (m.numJoints() - 1));
+  mo.handPose = hawor::Sequence<double>::Zero(T, 3 * (m.numJoints() - 1));
   mo.betas = hawor::Sequence<double>::Zero(T, B);
   for (int b = 0; b < B; ++b) mo.betas(0, b) = 0.5 + b, mo.betas(4, b) = -1.0 + 0.3 * b;
   for (int t = 1; t < 4; ++t) mo.betas.row(t).setConstant(NAN);  // missing frames

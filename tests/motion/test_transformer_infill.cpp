@@ -40,7 +40,7 @@ hawor::HandMotion<S> smoothHand(Eigen::Index T, const hawor::HandFeatureLayout& 
   hawor::HandMotion<S> m;
   m.rot.resize(T, 3);
   m.trans.resize(T, 3);
-  m.hand_pose.resize(T, 3 * l.joints);
+  m.handPose.resize(T, 3 * l.joints);
   m.betas.resize(T, l.betas);
   const double f = 0.05 + 0.02 * u(rng), ph = u(rng);
   for (Eigen::Index t = 0; t < T; ++t) {
@@ -49,7 +49,7 @@ hawor::HandMotion<S> smoothHand(Eigen::Index T, const hawor::HandFeatureLayout& 
       m.rot(t, i) = S(0.5 * a + 0.1 * i);
       m.trans(t, i) = S(0.2 * std::cos(f * double(t) + i));
     }
-    for (Eigen::Index j = 0; j < m.hand_pose.cols(); ++j) m.hand_pose(t, j) = S(0.3 * a * double(j % 3 + 1) / 3);
+    for (Eigen::Index j = 0; j < m.handPose.cols(); ++j) m.handPose(t, j) = S(0.3 * a * double(j % 3 + 1) / 3);
     for (Eigen::Index b = 0; b < l.betas; ++b) m.betas(t, b) = S(0.1 * double(b));
   }
   m.valid.assign(static_cast<size_t>(T), 1);
@@ -135,10 +135,10 @@ TEMPLATE_TEST_CASE("infillWindowed with the network: observed frames kept, missi
       if (seen) {
         CHECK(out[h].trans.row(t) == hands[h].trans.row(t));
         CHECK(out[h].rot.row(t) == hands[h].rot.row(t));
-        CHECK(out[h].hand_pose.row(t) == hands[h].hand_pose.row(t));
+        CHECK(out[h].handPose.row(t) == hands[h].handPose.row(t));
       } else {
         CHECK(out[h].trans.row(t).allFinite());
-        CHECK(out[h].hand_pose.row(t).allFinite());
+        CHECK(out[h].handPose.row(t).allFinite());
       }
     }
   }

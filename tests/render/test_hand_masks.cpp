@@ -23,9 +23,9 @@ struct TwoHands {
       hawor::HandMaskHand<double> h;
       h.model = s ? &right : &left;
       h.pose = hawor::HandPose<double>::zero(*h.model);
-      h.pose.globalOrient = hawor::Vec3<double>(0.3, s ? 0.4 : -0.5, 0.2);
-      h.pose.jointPose(3, 0) = 0.6;  // bend a finger
-      h.pose.transl = hawor::Vec3<double>(s ? 0.03 : -0.04, 0.01, s ? 0.30 : 0.34);
+      h.pose.rot = hawor::Vec3<double>(0.3, s ? 0.4 : -0.5, 0.2);
+      h.pose.handPose(3, 0) = 0.6;  // bend a finger
+      h.pose.trans = hawor::Vec3<double>(s ? 0.03 : -0.04, 0.01, s ? 0.30 : 0.34);
       hands.push_back(h);
     }
   }
@@ -102,7 +102,7 @@ TEST_CASE("renderHandMasks: errors", "[render][hand_masks]") {
   CHECK_THROWS_WITH(hawor::renderHandMasks(t.hands, t.cam, 2, m), Catch::Contains("one value"));
   t.hands[1].value = 255;
   CHECK_THROWS_WITH(hawor::renderHandMasks(t.hands, t.cam, -1, m), Catch::Contains(">= 0"));
-  t.hands[0].pose.transl(0) = NAN;
+  t.hands[0].pose.trans(0) = NAN;
   CHECK_THROWS_WITH(hawor::renderHandMasks(t.hands, t.cam, 0, m), Catch::Contains("non-finite"));
   t.hands[0].model = nullptr;
   CHECK_THROWS_WITH(hawor::renderHandMasks(t.hands, t.cam, 0, m), Catch::Contains("no model"));

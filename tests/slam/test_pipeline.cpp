@@ -339,7 +339,7 @@ TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]
   d[0].pRight = 2;
   CHECK_THROWS_WITH(p.push(im, d), Catch::Contains("pRight"));
   hawor::HandPose<double> nanPose = hawor::HandPose<double>::zero(leftHand());
-  nanPose.transl(0) = NAN;
+  nanPose.trans(0) = NAN;
   CHECK_THROWS_WITH(p.pushHands(im, {&nanPose, nullptr}), Catch::Contains("the left hand: parameters are not finite"));
   // a grey frame at the SLAM's size is taken as it is, then one frame gives a held camera
   hawor::ImageU8 grey(640, 480, 1, 90);

@@ -24,7 +24,7 @@ bool sameFrame(const hs::SynthFrame<S>& a, const hs::SynthFrame<S>& b) {
   }
   if (a.worldFromCamera.R != b.worldFromCamera.R || a.worldFromCamera.t != b.worldFromCamera.t) return false;
   for (int s = 0; s < 2; ++s) {
-    if (a.hands[s].jointsWorld != b.hands[s].jointsWorld || a.hands[s].world.jointPose != b.hands[s].world.jointPose) return false;
+    if (a.hands[s].jointsWorld != b.hands[s].jointsWorld || a.hands[s].world.handPose != b.hands[s].world.handPose) return false;
   }
   return true;
 }

@@ -177,7 +177,7 @@ TEMPLATE_TEST_CASE("synth: keypoints, hand parameters and camera poses agree", "
         // MANO rotates about J_0: the wrist keypoint is trans + J_0(β).
         hawor::HandWorkspace<S> ws;
         hawor::shapeHand(m, h.world.betas, ws);
-        const Vec3<S> wrist = h.world.transl + Vec3<S>(ws.jRest.row(0).transpose());
+        const Vec3<S> wrist = h.world.trans + Vec3<S>(ws.jRest.row(0).transpose());
         CHECK((wrist - Vec3<S>(h.jointsWorld.row(0).transpose())).norm() <= 10 * tol);
         // Both hands share one shape.
         CHECK((fr.hands[0].world.betas - fr.hands[1].world.betas).norm() == 0);

@@ -160,7 +160,7 @@ TEST_CASE("synth: hands hold still in the room while the head moves (table_work)
       int run = 0;
       double cam = 0;
       for (int i = 1; i < s.numFrames(); ++i) {
-        const double v = (s.handPoseWorld(side, i).transl - s.handPoseWorld(side, i - 1).transl).norm();
+        const double v = (s.handPoseWorld(side, i).trans - s.handPoseWorld(side, i - 1).trans).norm();
         const double c = (s.worldFromCamera(i).t - s.worldFromCamera(i - 1).t).norm();
         if (v < 1e-4) {
           ++run, cam += c;

@@ -355,24 +355,24 @@ class HandFitter {
       beta = o.beta;
     }
     void fromPose(const HandPose<Scalar>& p, int B) {
-      if (p.jointPose.rows() != w.rows() || p.jointPose.cols() != 3) {
-        throw Error("hand fit: pose has " + std::to_string(p.jointPose.rows()) + " joint rotations, the model has " +
+      if (p.handPose.rows() != w.rows() || p.handPose.cols() != 3) {
+        throw Error("hand fit: pose has " + std::to_string(p.handPose.rows()) + " joint rotations, the model has " +
                     std::to_string(w.rows()));
       }
       if (p.betas.size() > B) throw Error("hand fit: pose has more shape coefficients than the model");
-      if (!p.globalOrient.allFinite() || !p.transl.allFinite() || !p.jointPose.allFinite() || !p.betas.allFinite()) {
+      if (!p.rot.allFinite() || !p.trans.allFinite() || !p.handPose.allFinite() || !p.betas.allFinite()) {
         throw Error("hand fit: pose is not finite");
       }
-      R0 = axisAngleToMatrix(p.globalOrient);
-      t = p.transl;
-      w = p.jointPose;
+      R0 = axisAngleToMatrix(p.rot);
+      t = p.trans;
+      w = p.handPose;
       beta.setZero();
       beta.head(p.betas.size()) = p.betas;
     }
     void toPose(HandPose<Scalar>& p) const {
-      p.globalOrient = matrixToAxisAngle(R0);
-      p.transl = t;
-      p.jointPose = w;
+      p.rot = matrixToAxisAngle(R0);
+      p.trans = t;
+      p.handPose = w;
       p.betas = beta;
     }
   };
@@ -386,7 +386,7 @@ class HandFitter {
   };
   HandPose<Scalar> zeroPose() const {
     HandPose<Scalar> p;
-    p.jointPose = Points3<Scalar>::Zero(km_.J - 1, 3);
+    p.handPose = Points3<Scalar>::Zero(km_.J - 1, 3);
     p.betas = VecX<Scalar>::Zero(km_.B);
     return p;
   }
@@ -419,7 +419,7 @@ class HandFitter {
     if (!(opt.sigmaPx > Scalar(0)) || !(opt.robustScale > Scalar(0))) {
       throw Error(m + "sigmaPx and robustScale must be > 0");
     }
-    if (previous && (previous->jointPose.rows() != km_.J - 1 || previous->betas.size() > km_.B)) {
+    if (previous && (previous->handPose.rows() != km_.J - 1 || previous->betas.size() > km_.B)) {
       throw Error(m + "previous pose does not match the model");
     }
     int n2 = 0;
@@ -448,7 +448,7 @@ class HandFitter {
     opt_ = opt;
     prev_ = previous;
     if (previous) {
-      prevR_ = axisAngleToMatrix(previous->globalOrient);
+      prevR_ = axisAngleToMatrix(previous->rot);
       prevBeta_.setZero(km_.B);
       prevBeta_.head(previous->betas.size()) = previous->betas;
     }
@@ -574,7 +574,7 @@ class HandFitter {
         }
       }
       if (isTp > Scalar(0)) {
-        addLinear(E, build, c0, Mat3<Scalar>::Identity(), Vec3<Scalar>(w - prev_->jointPose.row(j - 1).transpose()),
+        addLinear(E, build, c0, Mat3<Scalar>::Identity(), Vec3<Scalar>(w - prev_->handPose.row(j - 1).transpose()),
                   isTp);
       }
     }
@@ -598,7 +598,7 @@ class HandFitter {
         addLinear(E, build, HandParamLayout::rot, Jinv, phi, isTr);
       }
       if (isTt > Scalar(0)) {
-        addLinear(E, build, HandParamLayout::transl, Mat3<Scalar>::Identity(), Vec3<Scalar>(s.t - prev_->transl), isTt);
+        addLinear(E, build, HandParamLayout::transl, Mat3<Scalar>::Identity(), Vec3<Scalar>(s.t - prev_->trans), isTt);
       }
     }
     if (build && !shapeFree && B > 0) {

@@ -37,15 +37,15 @@ namespace hawor {
 /// translation in metres.
 template <typename Scalar>
 struct HandPose {
-  Vec3<Scalar> globalOrient = Vec3<Scalar>::Zero();  ///< rotation of joint 0 (wrist)
-  Points3<Scalar> jointPose;  ///< (J−1)×3 axis-angles of joints 1..J−1, relative to their parent
-  VecX<Scalar> betas;         ///< shape coefficients; may be shorter than B (the rest are 0)
-  Vec3<Scalar> transl = Vec3<Scalar>::Zero();  ///< added to every output point
+  Vec3<Scalar> rot = Vec3<Scalar>::Zero();  ///< axis-angle of joint 0 (wrist): the global orientation
+  Points3<Scalar> handPose;  ///< (J−1)×3 axis-angles of joints 1..J−1, relative to their parent
+  VecX<Scalar> betas;        ///< shape coefficients; may be shorter than B (the rest are 0)
+  Vec3<Scalar> trans = Vec3<Scalar>::Zero();  ///< added to every output point
 
-  /// Zero pose, zero shape, zero translation for `model` (jointPose sized J−1, betas sized B).
+  /// Zero pose, zero shape, zero translation for `model` (handPose sized J−1, betas sized B).
   static HandPose zero(const HandModel<Scalar>& model) {
     HandPose p;
-    p.jointPose = Points3<Scalar>::Zero(model.numJoints() - 1, 3);
+    p.handPose = Points3<Scalar>::Zero(model.numJoints() - 1, 3);
     p.betas = VecX<Scalar>::Zero(model.numBetas());
     return p;
   }
@@ -333,17 +333,17 @@ namespace hand_detail {
 template <typename Scalar>
 void poseRotations(const HandModel<Scalar>& model, const HandPose<Scalar>& pose, std::vector<Mat3<Scalar>>& rot) {
   const int J = model.numJoints();
-  if (pose.jointPose.rows() != J - 1) {
-    throw Error("hand forward: jointPose has " + std::to_string(pose.jointPose.rows()) +
+  if (pose.handPose.rows() != J - 1) {
+    throw Error("hand forward: handPose has " + std::to_string(pose.handPose.rows()) +
                 " rows, the model has " + std::to_string(J - 1) + " non-root joints");
   }
-  if (!pose.globalOrient.allFinite() || !pose.jointPose.allFinite() || !pose.transl.allFinite()) {
+  if (!pose.rot.allFinite() || !pose.handPose.allFinite() || !pose.trans.allFinite()) {
     throw Error("hand forward: non-finite pose or translation");
   }
   rot.resize(static_cast<std::size_t>(J));
-  rot[0] = axisAngleToMatrix(pose.globalOrient);
+  rot[0] = axisAngleToMatrix(pose.rot);
   for (int j = 1; j < J; ++j) {
-    rot[static_cast<std::size_t>(j)] = axisAngleToMatrix(pose.jointPose.row(j - 1).transpose());
+    rot[static_cast<std::size_t>(j)] = axisAngleToMatrix(pose.handPose.row(j - 1).transpose());
   }
 }
 
@@ -356,7 +356,7 @@ void forward(const HandModel<Scalar>& model, const HandPose<Scalar>& pose, HandW
   hand_detail::requirePrepared(model);
   hand_detail::poseRotations(model, pose, ws.rot);
   shapeHand(model, pose.betas, ws);
-  poseHand(model, ws.rot.data(), pose.transl, ws, out);
+  poseHand(model, ws.rot.data(), pose.trans, ws, out);
 }
 
 /// Scratch buffers of forwardBatch().
@@ -422,7 +422,7 @@ void forwardBatch(const HandModel<Scalar>& model, const HandPose<Scalar>* poses,
       } else {
         ws.frame.vPosed = ws.frame.vShaped;
       }
-      hand_detail::kinematicsAndSkinning(model, ws.rot.data() + nJ * i, pose.transl, ws.frame, outs[b0 + i]);
+      hand_detail::kinematicsAndSkinning(model, ws.rot.data() + nJ * i, pose.trans, ws.frame, outs[b0 + i]);
     }
   }
 }

@@ -189,7 +189,7 @@ struct JointLimits {
 
 /// A random plausible articulation: each limited joint's anatomical angles uniform in the middle
 /// `fraction` of its range (fraction 1 = the whole range), mapped back to an axis-angle; other
-/// joints zero. Returns the (J−1,3) jointPose of HandPose. `rng` is any standard engine (the same
+/// joints zero. Returns the (J−1,3) handPose of HandPose. `rng` is any standard engine (the same
 /// numbers on every platform, see portable_random.hpp).
 template <typename Scalar, typename Rng>
 Points3<Scalar> sampleJointPose(const JointLimits<Scalar>& limits, Rng& rng, double fraction = 1.0) {

@@ -27,10 +27,10 @@ Vec3<Scalar> mirrorAxisAngle(const Vec3<Scalar>& w) {
 template <typename Scalar>
 HandPose<Scalar> mirrorPose(const HandPose<Scalar>& p) {
   HandPose<Scalar> m = p;
-  m.globalOrient = mirrorAxisAngle<Scalar>(p.globalOrient);
-  m.jointPose.col(1) = -p.jointPose.col(1);
-  m.jointPose.col(2) = -p.jointPose.col(2);
-  m.transl.x() = -p.transl.x();
+  m.rot = mirrorAxisAngle<Scalar>(p.rot);
+  m.handPose.col(1) = -p.handPose.col(1);
+  m.handPose.col(2) = -p.handPose.col(2);
+  m.trans.x() = -p.trans.x();
   return m;
 }
 

@@ -36,7 +36,7 @@ inline Eigen::Index firstValid(const ValidMask& valid, const char* what) {
 /// Camera-space hand → world space, per frame t (official cam2world, docs/design.md §3):
 ///   R_w = R_c2w(t)·R_c,  root_w = R_c2w(t)·(trans_c + J0) + t_c2w(t),  trans_w = root_w − J0
 /// i.e. world translation = R_c2w·root + t_c2w + offset with offset = −J0. Every frame is
-/// transformed (missing ones too); validity, hand_pose and betas are copied.
+/// transformed (missing ones too); validity, handPose and betas are copied.
 template <typename Scalar>
 HandMotion<Scalar> cameraToWorld(const HandMotion<Scalar>& cam,
                                  const std::vector<Mat3<Scalar>>& R_c2w,

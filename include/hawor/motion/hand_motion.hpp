@@ -14,13 +14,15 @@
 
 namespace hawor {
 
-/// MANO parameters of one hand over T frames (the official output keys). Rows are frames.
+/// MANO parameters of one hand over T frames. Rows are frames. The fields are HandPose's
+/// (hand/forward.hpp), one name per concept: files write them under the official output keys
+/// rot, trans, hand_pose, betas.
 ///   rot        T×3   global orientation, axis-angle (rotation about joint 0, docs/design.md §3)
 ///   trans      T×3   MANO translation `transl` (joint 0 sits at trans + J0(β))
-///   hand_pose  T×45  15 joint rotations, axis-angle, no PCA, no hands_mean (docs/design.md §3)
+///   handPose  T×45  15 joint rotations, axis-angle, no PCA, no hands_mean (docs/design.md §3)
 ///   betas      T×10  shape
 /// Other skinned hands with the same structure are accepted (zeros() makes MANO's sizes):
-/// hand_pose T×3K for K joint rotations (the default WebXR hand: K = 24) and betas T×B for any
+/// handPose T×3K for K joint rotations (the default WebXR hand: K = 24) and betas T×B for any
 /// B ≥ 0 (the WebXR hand: B = 0).
 ///   valid      T     nonzero = observed frame; the content of missing frames is ignored by
 ///                    validate() and overwritten by the fills (it may be zeros or NaN).
@@ -31,7 +33,7 @@ struct HandMotion {
 
   Sequence<Scalar> rot;
   Sequence<Scalar> trans;
-  Sequence<Scalar> hand_pose;
+  Sequence<Scalar> handPose;
   Sequence<Scalar> betas;
   ValidMask valid;
 
@@ -43,14 +45,14 @@ struct HandMotion {
     HandMotion m;
     m.rot = Sequence<Scalar>::Zero(frames, 3);
     m.trans = Sequence<Scalar>::Zero(frames, 3);
-    m.hand_pose = Sequence<Scalar>::Zero(frames, kPoseDim);
+    m.handPose = Sequence<Scalar>::Zero(frames, kPoseDim);
     m.betas = Sequence<Scalar>::Zero(frames, kBetaDim);
     m.valid.assign(static_cast<size_t>(frames), valid_value);
     return m;
   }
 
   /// Throws hawor::Error naming the field when shapes disagree (row counts, 3 columns for rot and
-  /// trans, a multiple of 3 for hand_pose) or a valid frame holds a non-finite value.
+  /// trans, a multiple of 3 for handPose) or a valid frame holds a non-finite value.
   void validate() const {
     const Eigen::Index T = rot.rows();
     auto shape = [T](const Sequence<Scalar>& m, Eigen::Index cols, const char* name) {
@@ -61,18 +63,18 @@ struct HandMotion {
     };
     shape(rot, 3, "rot");
     shape(trans, 3, "trans");
-    if (hand_pose.cols() % 3 != 0)
-      throw Error("HandMotion: hand_pose has " + std::to_string(hand_pose.cols()) +
+    if (handPose.cols() % 3 != 0)
+      throw Error("HandMotion: handPose has " + std::to_string(handPose.cols()) +
                   " columns, not a multiple of 3 (axis-angle triples; MANO: " +
                   std::to_string(kPoseDim) + ")");
-    shape(hand_pose, hand_pose.cols(), "hand_pose");
+    shape(handPose, handPose.cols(), "handPose");
     shape(betas, betas.cols(), "betas");
     checkMask(valid, T, "HandMotion");
     for (Eigen::Index t = 0; t < T; ++t) {
       if (!valid[static_cast<size_t>(t)]) continue;
       const char* bad = !rot.row(t).allFinite()         ? "rot"
                         : !trans.row(t).allFinite()     ? "trans"
-                        : !hand_pose.row(t).allFinite() ? "hand_pose"
+                        : !handPose.row(t).allFinite() ? "handPose"
                         : !betas.row(t).allFinite()     ? "betas"
                                                         : nullptr;
       if (bad)
@@ -97,7 +99,7 @@ Vec3<Scalar> restRoot(const Points3<Scalar>& J0, Eigen::Index t, Eigen::Index fr
 /// the root joint (trans + J0) is the point that moves:
 ///   R_hand' = R·R_hand,  root' = R·(trans + J0) + p,  trans' = root' − J0
 /// (i.e. trans' = R·trans + p + (R − I)·J0; the offset transl − root = −J0 is unchanged).
-/// hand_pose and betas are intrinsic and unchanged.
+/// handPose and betas are intrinsic and unchanged.
 template <typename Scalar>
 void transformHandFrame(HandMotion<Scalar>& m, Eigen::Index t, const Mat3<Scalar>& R,
                         const Vec3<Scalar>& p, const Vec3<Scalar>& J0) {

@@ -96,7 +96,7 @@ InfillResult<Scalar> infillHand(const HandMotion<Scalar>& world, const Points3<S
     if (world.valid[static_cast<size_t>(t)]) continue;
     r.motion.rot.row(t) = back.rot.row(t);
     r.motion.trans.row(t) = back.trans.row(t);
-    r.motion.hand_pose.row(t) = back.hand_pose.row(t);
+    r.motion.handPose.row(t) = back.handPose.row(t);
     r.motion.betas.row(t) = back.betas.row(t);
     r.filled[static_cast<size_t>(t)] = 1;
   }
@@ -121,7 +121,7 @@ class SplineWindowInfiller : public WindowInfiller<Scalar> {
       HandMotion<Scalar> m;
       m.rot.resize(W, 3);
       m.trans.resize(W, 3);
-      m.hand_pose.resize(W, 3 * l.joints);
+      m.handPose.resize(W, 3 * l.joints);
       m.betas.resize(W, l.betas);
       m.valid = w.valid[h];
       for (Eigen::Index r = 0; r < W; ++r) unpackHandFeatures(w.features, r, h * l.size(), l, m, r);

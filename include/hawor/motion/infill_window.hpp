@@ -42,7 +42,7 @@ constexpr Eigen::Index kInfillWindow = 120;
 /// Column layout of one hand's per-frame features (step 3 of the file comment).
 struct HandFeatureLayout {
   Eigen::Index betas = 10;   ///< B
-  Eigen::Index joints = 15;  ///< K joint rotations (hand_pose has 3K columns)
+  Eigen::Index joints = 15;  ///< K joint rotations (handPose has 3K columns)
 
   Eigen::Index size() const { return 3 + betas + 6 + 6 * joints; }
   Eigen::Index transOffset() const { return 0; }
@@ -55,7 +55,7 @@ struct HandFeatureLayout {
   static HandFeatureLayout of(const HandMotion<Scalar>& m) {
     HandFeatureLayout l;
     l.betas = m.betas.cols();
-    l.joints = m.hand_pose.cols() / 3;
+    l.joints = m.handPose.cols() / 3;
     return l;
   }
 };
@@ -89,7 +89,7 @@ void packHandFeatures(const HandMotion<Scalar>& m, Eigen::Index t, const HandFea
   const Vec3<Scalar> root = m.rot.row(t).transpose();
   f.row(row).template segment<6>(col0 + l.rootOffset()) = matrixToRot6d(axisAngleToMatrix(root)).transpose();
   for (Eigen::Index j = 0; j < l.joints; ++j) {
-    const Vec3<Scalar> a = m.hand_pose.row(t).template segment<3>(3 * j).transpose();
+    const Vec3<Scalar> a = m.handPose.row(t).template segment<3>(3 * j).transpose();
     f.row(row).template segment<6>(col0 + l.jointOffset(j)) = matrixToRot6d(axisAngleToMatrix(a)).transpose();
   }
 }
@@ -108,7 +108,7 @@ void unpackHandFeatures(const Sequence<Scalar>& f, Eigen::Index row, Eigen::Inde
   m.rot.row(t).template head<3>() = matrixToAxisAngle(rot6dToMatrix(r)).transpose();
   for (Eigen::Index j = 0; j < l.joints; ++j) {
     const Vec6<Scalar> q = f.row(row).template segment<6>(col0 + l.jointOffset(j)).transpose();
-    m.hand_pose.row(t).template segment<3>(3 * j) = matrixToAxisAngle(rot6dToMatrix(q)).transpose();
+    m.handPose.row(t).template segment<3>(3 * j) = matrixToAxisAngle(rot6dToMatrix(q)).transpose();
   }
 }
 
@@ -120,7 +120,7 @@ HandMotion<Scalar> sliceFrames(const HandMotion<Scalar>& m, Eigen::Index begin, 
   HandMotion<Scalar> s;
   s.rot = m.rot.middleRows(begin, n);
   s.trans = m.trans.middleRows(begin, n);
-  s.hand_pose = m.hand_pose.middleRows(begin, n);
+  s.handPose = m.handPose.middleRows(begin, n);
   s.betas = m.betas.middleRows(begin, n);
   s.valid.assign(m.valid.begin() + begin, m.valid.begin() + begin + n);
   return s;
@@ -232,7 +232,7 @@ std::array<HandMotion<Scalar>, 2> infillWindowed(const std::array<HandMotion<Sca
         const Eigen::Index t = start + r;
         out[h].rot.row(t) = back.rot.row(r);
         out[h].trans.row(t) = back.trans.row(r);
-        out[h].hand_pose.row(t) = back.hand_pose.row(r);
+        out[h].handPose.row(t) = back.handPose.row(r);
         out[h].betas.row(t) = back.betas.row(r);
         if (filled) (*filled)[h][static_cast<size_t>(t)] = 1;
       }

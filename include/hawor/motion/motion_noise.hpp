@@ -90,7 +90,7 @@ template <typename Scalar>
 struct HandNoise {
   Scalar trans = Scalar(0);    ///< metres
   Scalar rot = Scalar(0);      ///< radians, global orientation
-  std::vector<Scalar> joints;  ///< radians, one per joint rotation of hand_pose
+  std::vector<Scalar> joints;  ///< radians, one per joint rotation of handPose
 };
 
 /// Noise σ of a hand's translation, global rotation and each joint rotation (observed frames).
@@ -102,8 +102,8 @@ HandNoise<Scalar> estimateHandNoise(const HandMotion<Scalar>& m) {
   HandNoise<Scalar> n;
   n.trans = estimateVectorNoise(m.trans, 0, m.valid);
   n.rot = estimateRotationNoise(m.rot, 0, m.valid);
-  for (Eigen::Index c = 0; c < m.hand_pose.cols(); c += 3)
-    n.joints.push_back(estimateRotationNoise(m.hand_pose, c, m.valid));
+  for (Eigen::Index c = 0; c < m.handPose.cols(); c += 3)
+    n.joints.push_back(estimateRotationNoise(m.handPose, c, m.valid));
   return n;
 }
 

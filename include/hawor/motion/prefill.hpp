@@ -20,7 +20,7 @@ HandMotion<Scalar> fillInterpolate(const HandMotion<Scalar>& m) {
   HandMotion<Scalar> out;
   out.rot = fillRotations(m.rot, m.valid);
   out.trans = fillLinear(m.trans, m.valid);
-  out.hand_pose = fillRotations(m.hand_pose, m.valid);
+  out.handPose = fillRotations(m.handPose, m.valid);
   out.betas = fillLinear(m.betas, m.valid);
   out.valid = m.valid;
   return out;
@@ -33,7 +33,7 @@ HandMotion<Scalar> fillLastPose(const HandMotion<Scalar>& m) {
   HandMotion<Scalar> out;
   out.rot = fillLastPose(m.rot, m.valid);
   out.trans = fillLastPose(m.trans, m.valid);
-  out.hand_pose = fillLastPose(m.hand_pose, m.valid);
+  out.handPose = fillLastPose(m.handPose, m.valid);
   out.betas = fillLastPose(m.betas, m.valid);
   out.valid = m.valid;
   return out;

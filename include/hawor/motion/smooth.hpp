@@ -118,7 +118,7 @@ void smoothChannel(const Sequence<Scalar>& seq, Eigen::Index col, const ValidMas
 }  // namespace smooth_detail
 
 /// The bounded smoother of the file comment applied to the observed frames of `m` (trans, rot,
-/// every joint of hand_pose). Missing frames, betas and the mask are copied unchanged.
+/// every joint of handPose). Missing frames, betas and the mask are copied unchanged.
 template <typename Scalar>
 HandMotion<Scalar> smoothObserved(const HandMotion<Scalar>& m, const SmoothOptions<Scalar>& o = {}) {
   m.validate();
@@ -128,9 +128,9 @@ HandMotion<Scalar> smoothObserved(const HandMotion<Scalar>& m, const SmoothOptio
   smooth_detail::smoothChannel(m.trans, 0, m.valid, false, bt, o.halfWindow, out.trans);
   const Scalar br = std::min(o.maxSigmas * estimateRotationNoise(m.rot, 0, m.valid), o.maxAngle);
   smooth_detail::smoothChannel(m.rot, 0, m.valid, true, br, o.halfWindow, out.rot);
-  for (Eigen::Index c = 0; c < m.hand_pose.cols(); c += 3) {
-    const Scalar bj = std::min(o.maxSigmas * estimateRotationNoise(m.hand_pose, c, m.valid), o.maxAngle);
-    smooth_detail::smoothChannel(m.hand_pose, c, m.valid, true, bj, o.halfWindow, out.hand_pose);
+  for (Eigen::Index c = 0; c < m.handPose.cols(); c += 3) {
+    const Scalar bj = std::min(o.maxSigmas * estimateRotationNoise(m.handPose, c, m.valid), o.maxAngle);
+    smooth_detail::smoothChannel(m.handPose, c, m.valid, true, bj, o.halfWindow, out.handPose);
   }
   return out;
 }

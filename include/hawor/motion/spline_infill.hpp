@@ -301,7 +301,7 @@ Sequence<Scalar> fillSplineRotations(const Sequence<Scalar>& seq, const ValidMas
   return out;
 }
 
-/// The spline fill of a hand (file comment): trans by fillSplineVectors, rot and hand_pose by
+/// The spline fill of a hand (file comment): trans by fillSplineVectors, rot and handPose by
 /// fillSplineRotations, betas by LERP; valid frames and the mask unchanged. `noise` (optional)
 /// gives the channels' noise levels instead of estimating them from `m` (e.g. those of the raw
 /// observations when `m` was smoothed). Throws if no frame is valid (see infill.hpp for the
@@ -318,7 +318,7 @@ HandMotion<Scalar> fillSpline(const HandMotion<Scalar>& m, const SplineInfillOpt
   HandMotion<Scalar> out;
   out.trans = fillSplineVectors(m.trans, m.valid, o, noise ? &st : nullptr);
   out.rot = fillSplineRotations(m.rot, m.valid, o, noise ? &sr : nullptr);
-  out.hand_pose = fillSplineRotations(m.hand_pose, m.valid, o, noise ? &noise->joints : nullptr);
+  out.handPose = fillSplineRotations(m.handPose, m.valid, o, noise ? &noise->joints : nullptr);
   out.betas = fillLinear(m.betas, m.valid);
   out.valid = m.valid;
   return out;

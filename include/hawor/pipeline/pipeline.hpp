@@ -201,7 +201,7 @@ class Pipeline {
       o.keypoints3d = X;
       if (!o.keypoints2d.allFinite() || !fitSide(s, o, opt_.camera, true)) continue;
       const Vec3<Scalar> shift = (X.colwise().mean() - o.keypoints.colwise().mean()).transpose();
-      o.pose.transl += shift;
+      o.pose.trans += shift;
       o.keypoints.rowwise() += shift.transpose();
       previous_[s] = o.pose;
       o.fitted = believable(o);
@@ -381,15 +381,15 @@ class Pipeline {
 
   void checkPose(const HandPose<Scalar>& p, int s) const {
     const std::string what = "pipeline: frame " + std::to_string(frames_.size()) + ", the " + sideName(s) + " hand";
-    if (p.jointPose.rows() != models_[s]->numJoints() - 1 || p.jointPose.cols() != 3) {
-      throw Error(what + ": " + std::to_string(p.jointPose.rows()) + " joint rotations, the model has " + std::to_string(models_[s]->numJoints() - 1));
+    if (p.handPose.rows() != models_[s]->numJoints() - 1 || p.handPose.cols() != 3) {
+      throw Error(what + ": " + std::to_string(p.handPose.rows()) + " joint rotations, the model has " + std::to_string(models_[s]->numJoints() - 1));
     }
     if (p.betas.size() > models_[s]->numBetas()) throw Error(what + ": " + std::to_string(p.betas.size()) + " betas, the model has " + std::to_string(models_[s]->numBetas()));
-    if (!p.globalOrient.allFinite() || !p.jointPose.allFinite() || !p.betas.allFinite() || !p.transl.allFinite()) throw Error(what + ": parameters are not finite");
+    if (!p.rot.allFinite() || !p.handPose.allFinite() || !p.betas.allFinite() || !p.trans.allFinite()) throw Error(what + ": parameters are not finite");
   }
 
   bool believable(const Side& o) const {
-    const Scalar z = o.pose.transl(2);
+    const Scalar z = o.pose.trans(2);
     return z > opt_.minHandDepth && z < opt_.maxHandDepth && std::isfinite(double(o.reprojRmsPx));
   }
 
@@ -526,7 +526,7 @@ class Pipeline {
     h.valid.assign(static_cast<std::size_t>(T), 0);
     h.camera.rot = Sequence<Scalar>::Constant(T, 3, nan);
     h.camera.trans = Sequence<Scalar>::Constant(T, 3, nan);
-    h.camera.hand_pose = Sequence<Scalar>::Constant(T, P, nan);
+    h.camera.handPose = Sequence<Scalar>::Constant(T, P, nan);
     h.camera.betas = Sequence<Scalar>::Constant(T, B, nan);
     h.jointsCam = Sequence<Scalar>::Constant(T, 3 * kKeypoints, nan);
     h.keypoints2d = Sequence<Scalar>::Constant(T, 2 * kKeypoints, nan);
@@ -536,9 +536,9 @@ class Pipeline {
       if (o.detected) h.keypoints2d.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 2 * kKeypoints>>(o.keypoints2d.data());
       if (!o.fitted) continue;
       h.valid[static_cast<std::size_t>(t)] = 1;
-      h.camera.rot.row(t) = o.pose.globalOrient.transpose();
-      h.camera.trans.row(t) = o.pose.transl.transpose();
-      h.camera.hand_pose.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, Eigen::Dynamic>>(o.pose.jointPose.data(), P);
+      h.camera.rot.row(t) = o.pose.rot.transpose();
+      h.camera.trans.row(t) = o.pose.trans.transpose();
+      h.camera.handPose.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, Eigen::Dynamic>>(o.pose.handPose.data(), P);
       const Eigen::Index nb = std::min<Eigen::Index>(B, o.pose.betas.size());
       if (nb > 0) h.camera.betas.row(t).head(nb) = o.pose.betas.head(nb).transpose();
       h.jointsCam.row(t) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 3 * kKeypoints>>(o.keypoints.data());
@@ -646,7 +646,7 @@ class Pipeline {
     auto t0 = Clock::now();
     // cameraToWorld wants finite numbers everywhere: unobserved frames hold zeros
     HandMotion<Scalar> cam = h.camera;
-    for (Sequence<Scalar>* a : {&cam.rot, &cam.trans, &cam.hand_pose, &cam.betas}) *a = a->unaryExpr([](Scalar v) { return std::isfinite(double(v)) ? v : Scalar(0); });
+    for (Sequence<Scalar>* a : {&cam.rot, &cam.trans, &cam.handPose, &cam.betas}) *a = a->unaryExpr([](Scalar v) { return std::isfinite(double(v)) ? v : Scalar(0); });
     std::vector<Mat3<Scalar>> R;
     std::vector<Vec3<Scalar>> t;
     for (const SE3<Scalar>& P : cameraPoses) {
@@ -658,7 +658,7 @@ class Pipeline {
     t0 = Clock::now();
     for (Eigen::Index f = 0; f < T; ++f) {
       if (h.valid[static_cast<std::size_t>(f)]) continue;
-      for (Sequence<Scalar>* a : {&world.rot, &world.trans, &world.hand_pose, &world.betas}) a->row(f).setConstant(nan);
+      for (Sequence<Scalar>* a : {&world.rot, &world.trans, &world.handPose, &world.betas}) a->row(f).setConstant(nan);
     }
     InfillOptions<Scalar> io;
     io.method = opt_.infill;
@@ -670,9 +670,9 @@ class Pipeline {
     h.jointsWorld.resize(T, 3 * kKeypoints);
     for (Eigen::Index f = 0; f < T; ++f) {
       HandPose<Scalar> p = HandPose<Scalar>::zero(model);
-      p.globalOrient = h.world.rot.row(f).transpose();
-      p.transl = h.world.trans.row(f).transpose();
-      std::copy(h.world.hand_pose.row(f).data(), h.world.hand_pose.row(f).data() + h.world.hand_pose.cols(), p.jointPose.data());
+      p.rot = h.world.rot.row(f).transpose();
+      p.trans = h.world.trans.row(f).transpose();
+      std::copy(h.world.handPose.row(f).data(), h.world.handPose.row(f).data() + h.world.handPose.cols(), p.handPose.data());
       if (h.world.betas.cols() > 0) p.betas = h.world.betas.row(f).transpose();
       const Points3<Scalar> kp = forward(model, p).keypoints;
       h.jointsWorld.row(f) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 3 * kKeypoints>>(kp.data());

@@ -1028,11 +1028,11 @@ HandPose<Scalar> interpolateHandPose(const HandPose<Scalar>& a, const HandPose<S
     return Vec3<Scalar>(quaternionToAxisAngle(qx.slerp(u, qy)));
   };
   HandPose<Scalar> p = a;
-  p.globalOrient = slerp(a.globalOrient, b.globalOrient);
-  for (Eigen::Index j = 0; j < a.jointPose.rows(); ++j) {
-    p.jointPose.row(j) = slerp(a.jointPose.row(j).transpose(), b.jointPose.row(j).transpose()).transpose();
+  p.rot = slerp(a.rot, b.rot);
+  for (Eigen::Index j = 0; j < a.handPose.rows(); ++j) {
+    p.handPose.row(j) = slerp(a.handPose.row(j).transpose(), b.handPose.row(j).transpose()).transpose();
   }
-  p.transl = a.transl + u * (b.transl - a.transl);
+  p.trans = a.trans + u * (b.trans - a.trans);
   if (a.betas.size() == b.betas.size()) p.betas = a.betas + u * (b.betas - a.betas);
   return p;
 }

@@ -136,11 +136,11 @@ class HandRig {
   HandPose<Scalar> pose(const Vec3<Scalar>& wrist, const Mat3<Scalar>& R, const Gesture<Scalar>& g,
                         const VecX<Scalar>& betas, HandWorkspace<Scalar>& ws) const {
     HandPose<Scalar> p;
-    p.globalOrient = matrixToAxisAngle(R);
-    p.jointPose = jointPose(g);
+    p.rot = matrixToAxisAngle(R);
+    p.handPose = jointPose(g);
     p.betas = betas;
     shapeHand(*model_, betas, ws);
-    p.transl = wrist - Vec3<Scalar>(ws.jRest.row(0).transpose());
+    p.trans = wrist - Vec3<Scalar>(ws.jRest.row(0).transpose());
     return p;
   }
 

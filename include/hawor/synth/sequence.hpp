@@ -6,8 +6,8 @@
 // (pipeline/world_frame.hpp), so gravity, floor and metric scale can be checked against it.
 // Camera poses are camera-to-world, T_w_c(i), at times t_i = i / fps.
 // Hands (docs/design.md §3). Per hand and frame the MANO parameters in the world frame: rot (axis-angle
-// of joint 0), hand_pose (the J−1 joint axis-angles), betas (fixed per sequence, shared by both
-// hands: one person), trans, with vertices = forward(rot, hand_pose, betas, trans) in world
+// of joint 0), handPose (the J−1 joint axis-angles), betas (fixed per sequence, shared by both
+// hands: one person), trans, with vertices = forward(rot, handPose, betas, trans) in world
 // coordinates (the rotation acts about J_0(β): the wrist is at J_0(β) + trans). The camera-frame
 // parameters follow the same rule: rot_c = R_cw·rot, trans_c = R_cw·(trans + J_0) + t_cw − J_0.
 // joints_world / joints_cam are the 21 keypoints (OpenPose order) of the forward pass, world and
@@ -201,9 +201,9 @@ class SynthSequence {
     const HandPose<Scalar>& w = handPoseWorld(side, i);
     const RigidPose<Scalar> cw = worldFromCamera(i).inverse();
     HandPose<Scalar> c = w;
-    c.globalOrient = matrixToAxisAngle(Mat3<Scalar>(cw.R * axisAngleToMatrix(w.globalOrient)));
+    c.rot = matrixToAxisAngle(Mat3<Scalar>(cw.R * axisAngleToMatrix(w.rot)));
     const Vec3<Scalar>& j0 = root_[static_cast<std::size_t>(side)];  // J_0(β), β fixed per sequence
-    c.transl = cw.R * (w.transl + j0) + cw.t - j0;
+    c.trans = cw.R * (w.trans + j0) + cw.t - j0;
     return c;
   }
 

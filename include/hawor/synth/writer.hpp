@@ -212,12 +212,12 @@ SynthWriteSummary writeSynthSequence(SynthSequence<Scalar>& seq, const std::stri
       const SynthHandFrame<Scalar>& h = fr.hands[s];
       HandArrays& a = arr[s];
       for (int c = 0; c < 3; ++c) {
-        a.trans.push_back(static_cast<double>(h.world.transl(c)));
-        a.rot.push_back(static_cast<double>(h.world.globalOrient(c)));
-        a.camRot.push_back(static_cast<double>(h.camera.globalOrient(c)));
-        a.camTrans.push_back(static_cast<double>(h.camera.transl(c)));
+        a.trans.push_back(static_cast<double>(h.world.trans(c)));
+        a.rot.push_back(static_cast<double>(h.world.rot(c)));
+        a.camRot.push_back(static_cast<double>(h.camera.rot(c)));
+        a.camTrans.push_back(static_cast<double>(h.camera.trans(c)));
       }
-      for (Eigen::Index k = 0; k < h.world.jointPose.size(); ++k) a.pose.push_back(static_cast<double>(h.world.jointPose.data()[k]));
+      for (Eigen::Index k = 0; k < h.world.handPose.size(); ++k) a.pose.push_back(static_cast<double>(h.world.handPose.data()[k]));
       for (std::size_t k = 0; k < a.betaDim; ++k) {
         a.betas.push_back(static_cast<Eigen::Index>(k) < h.world.betas.size() ? static_cast<double>(h.world.betas(static_cast<Eigen::Index>(k))) : 0.0);
       }
