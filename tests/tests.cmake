@@ -23,21 +23,17 @@ foreach(module slam hand geometry motion eval io render synth scale)
   if(module STREQUAL "io" OR module STREQUAL "hand")
     set(_parser PARSER)
   endif()
-  # The WebAssembly build leaves out the SLAM system test (MonoSlam<float> and <double>, the
-  # longest compile of the suite): MonoSlam under WebAssembly is checked by the wasm_bindings test
-  # (wasm/CMakeLists.txt) on a synthetic sequence against the ground truth and the native CLI.
-  if(EMSCRIPTEN AND module STREQUAL "slam")
-    list(FILTER _unit EXCLUDE REGEX "test_(mono_slam|pipeline)\\.cpp$")
-  endif()
-  # Nor does it build the synthetic generator's tests (the generator is not part of the
-  # WebAssembly core: wasm/bindings.cpp does not include synth/), nor those of hand/ and motion/,
-  # whose WebAssembly paths run end to end in the core's own tests: the fit against a known pose,
-  # the default and MANO-format hand models and the infilling in wasm_bindings
-  # (tests/wasm/test_bindings.mjs), the MANO pickles dropped on the page in tests/browser. The
-  # three were about three minutes of the suite's two cores, which ran at its 15-minute budget;
-  # render/ (masks, rectification, resampling), slam/, geometry/, scale/, eval/ and io/ keep
-  # their WebAssembly unit tests.
-  if(EMSCRIPTEN AND module MATCHES "^(synth|hand|motion)$")
+  # The WebAssembly build leaves out the synthetic generator's tests (the generator is not part
+  # of the WebAssembly core: wasm/bindings.cpp does not include synth/), and those of hand/,
+  # motion/ and slam/, whose WebAssembly paths run end to end in the core's own tests: the fit
+  # against a known pose, the default and MANO-format hand models and the infilling in
+  # wasm_bindings (tests/wasm/test_bindings.mjs), MonoSlam there against the ground truth and the
+  # native CLI, the whole pipeline (SLAM, fit, masks, scale, infilling) in
+  # tests/web/pipeline_native_wasm.test.mjs against the native build to 1e-14 m, the MANO
+  # pickles dropped on the page in tests/browser. The four were about four minutes of the suite's
+  # two cores (slam/'s unit alone 80 s), which ran at its 15-minute budget; render/ (masks,
+  # rectification, resampling), geometry/, scale/, eval/ and io/ keep their WebAssembly unit tests.
+  if(EMSCRIPTEN AND module MATCHES "^(synth|hand|motion|slam)$")
     set(_unit "")
   endif()
   if(HAWOR_SANITIZE AND module STREQUAL "hand")
