@@ -4,7 +4,8 @@
 // real clip (../shared/data/egocentric_kitchen.mp4, its first HAWOR_KITCHEN_FRAMES frames, default
 // 40, at 640 px; skipped with a message when absent) through the file input, the stage list (every
 // stage done after a run), the 3D scene, every
-// export (npz read by numpy, GLB by three's GLTFLoader and the Khronos validator, JSON, TUM), and a
+// export (npz read by numpy, GLB by three's GLTFLoader and the Khronos validator, JSON, TUM), the
+// page's runPipeline against the native `hawor world` on the same frames and hands, and a
 // console free of errors. Screenshots, exports and timings go to build/browser-test/.
 //
 //   bash scripts/build_web.sh && node --test tests/browser/
@@ -312,6 +313,81 @@ test('the real clip through the file input', { skip: skip || (!existsSync(KITCHE
   await page.waitForTimeout(300);
   await page.screenshot({ path: join(out, 'kitchen.png') });
   await checkGlb(await download('glb'), KITCHEN_FRAMES, 30);
+});
+
+const HAWOR = join(root, 'build/native/examples/hawor');
+const HANDS_DIR = join(root, 'build/native/models');
+const noWorld = !existsSync(HAWOR) ? `${HAWOR} missing` : !existsSync(join(HANDS_DIR, 'hand_left.npz')) ? `${HANDS_DIR}/hand_left.npz missing` : false;
+
+test('the browser and the native `hawor world` give the same world on the same frames and camera-frame hands', { skip: skip || noWorld, timeout: 240000 }, async () => {
+  // A hawor synth sequence and its ground-truth camera-frame hands: the native run, then the
+  // page's runPipeline (the WebAssembly core in Chromium) on the same RGB frames.
+  const W = 480, H = 360, T = 40;  // the smallest at which the SLAM initialises on these 40 frames
+  const dir = mkdtempSync(join(tmpdir(), 'hawor-browser-world-'));
+  try {
+    let r = spawnSync(HAWOR, ['synth', '--preset', 'table_work', '--seed', '2', '--frames', String(T), '--size', `${W}x${H}`, '--out', join(dir, 'seq')], { encoding: 'utf8' });
+    assert.equal(r.status, 0, r.stderr);
+    const [fx, fy, cx, cy] = readFileSync(join(dir, 'seq/intrinsics.txt'), 'utf8').split('\n')[0].trim().split(/\s+/).map(Number);
+    r = spawnSync(HAWOR, ['world', '--images', join(dir, 'seq/rgb'), '--hands', join(dir, 'seq/hands_gt.npz'), '--intrinsics', `${fx},${fy},${cx},${cy}`,
+      '--out', join(dir, 'native')], { encoding: 'utf8', env: { ...process.env, HAWOR_HAND_DIR: HANDS_DIR } });
+    assert.equal(r.status, 0, r.stderr);
+    const rgb = spawnSync('ffmpeg', ['-v', 'error', '-i', join(dir, 'seq/rgb/%06d.png'), '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-'], { maxBuffer: 1 << 28 }).stdout;
+    assert.equal(rgb.length, T * W * H * 3);
+    const { loadCore } = await import('../../web/cli.mjs');
+    const core = await loadCore(join(root, 'build/wasm/wasm/hawor_core.mjs'));
+    const gt = core.readNpz(readFileSync(join(dir, 'seq/hands_gt.npz')), 'hands_gt.npz');
+    const rows = (key) => Array.from(gt[key].data).map(Number);
+    const hands = {};
+    for (const side of ['left', 'right']) {
+      hands[side] = { valid: Array.from(gt[`${side}_valid`].data).map(Number), rot: rows(`${side}_cam_rot`), trans: rows(`${side}_cam_trans`),
+        handPose: rows(`${side}_hand_pose`), betas: rows(`${side}_betas`) };
+    }
+    const models = { left: readFileSync(join(HANDS_DIR, 'hand_left.npz')).toString('base64'), right: readFileSync(join(HANDS_DIR, 'hand_right.npz')).toString('base64') };
+    const res = await page.evaluate(async ({ frames, hands, models, W, H, T, fx }) => {
+      const bytes = (b64) => Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+      const all = bytes(frames);
+      const { loadCore } = await import('/web/src/core.mjs');
+      const { runPipeline } = await import('/web/src/pipeline/run.mjs');
+      const core = await loadCore();
+      const n = (side, key) => hands[side][key].length / T;
+      const handsCam = (f) => {
+        const out = {};
+        for (const side of ['left', 'right']) {
+          const h = hands[side], row = (key) => Float64Array.from(h[key].slice(n(side, key) * f, n(side, key) * (f + 1)));
+          out[side] = h.valid[f] ? { rot: row('rot'), trans: row('trans'), handPose: row('handPose'), betas: row('betas') } : null;
+        }
+        return out;
+      };
+      const source = { width: W, height: H, fps: 30, frameCount: T,
+        frames: (async function* () { for (let f = 0; f < T; ++f) yield { index: f, rgba: all.subarray(f * W * H * 3, (f + 1) * W * H * 3) }; })() };
+      const r = await runPipeline(source, { core, handModels: { left: bytes(models.left), right: bytes(models.right) }, handsCam, focalPx: fx });
+      return { positions: Array.from(r.camera.positions), scale: r.scale.scale, method: r.scale.method, initialised: r.slam.initialised,
+        left: Array.from(r.hands.left.jointsWorld), right: Array.from(r.hands.right.jointsWorld) };
+    }, { frames: rgb.toString('base64'), hands, models, W, H, T, fx });
+    assert.ok(res.initialised, 'the SLAM initialised in the browser');
+    const summary = JSON.parse(r.stdout);
+    assert.equal(res.method, summary.method);
+    const tum = readFileSync(join(dir, 'native/camera.tum'), 'utf8').trim().split('\n').filter((l) => !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
+    let dCam = 0;
+    for (let f = 0; f < T; ++f) for (let a = 0; a < 3; ++a) dCam = Math.max(dCam, Math.abs(tum[f][1 + a] - res.positions[3 * f + a]));
+    const world = core.readNpz(readFileSync(join(dir, 'native/world.npz')), 'world.npz');
+    let dHand = 0, compared = 0;
+    for (const side of ['left', 'right']) {
+      const a = world[`${side}_joints_world`].data, b = res[side];  // NaN crosses page.evaluate as null
+      assert.equal(a.length, b.length);
+      for (let i = 0; i < a.length; ++i) {
+        if (Number.isNaN(a[i]) || b[i] === null || Number.isNaN(b[i])) { assert.ok(Number.isNaN(a[i]) && (b[i] === null || Number.isNaN(b[i])), `${side} joint ${i}: NaN in one run only`); continue; }
+        dHand = Math.max(dHand, Math.abs(a[i] - b[i]));
+        compared += 1;
+      }
+    }
+    timings.worldBrowserVsNative = { camera: dCam, joints: dHand, compared };
+    assert.ok(compared > 500, `${compared} joint coordinates compared`);
+    assert.ok(dCam <= 1e-6, `camera positions differ by ${dCam} m`);
+    assert.ok(dHand <= 1e-6, `world joints differ by ${dHand} m`);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
 });
 
 test('the console stayed free of errors', { skip }, () => {
