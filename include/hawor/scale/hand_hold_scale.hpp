@@ -27,6 +27,11 @@
 // Why the weighting: with isotropic weights the depth error (several mm, and slowly varying)
 // dominates the windows; on bench_scale.py's fast_turns (short holds) the isotropic fit is
 // biased 4 % low even on the true trajectory and fails outright in some draws.
+// Carried hands: a window whose hand is still in the CAMERA frame (the same test on the
+// camera-frame positions h_t with Λ there) is left out: such a hand moves with the head, says
+// nothing about α, and looks still in the world at a small α. With a regressor's per-frame jitter
+// (bench_world.py --hand-noise 5) the noise estimate grows, those windows passed τ and pulled α
+// 2-10x low at a high confidence; a real hold while the head moves is not still in the camera.
 // Limits: a hand carried by a body that moves with the camera at low frequency looks still at too
 // small an α; windows shorter than a real hold and τ ≈ 3 keep that small (bench_scale.py).
 #pragma once
@@ -83,13 +88,14 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   // Per hand: usable frames, world-rotated positions x_t and rays u_t; the centres c_t.
   const std::size_t H = hands.size();
   std::vector<std::vector<char>> usable(H, std::vector<char>(T, 0));
-  std::vector<std::vector<Eigen::Vector3d>> x(H, std::vector<Eigen::Vector3d>(T)), u = x;
+  std::vector<std::vector<Eigen::Vector3d>> x(H, std::vector<Eigen::Vector3d>(T)), u = x, hc = x;
   std::vector<Eigen::Vector3d> c(T);
   for (std::size_t t = 0; t < T; ++t) c[t] = T_w_c[t].translation().template cast<double>();
   for (std::size_t h = 0; h < H; ++h) {
     for (std::size_t t = 0; t < T; ++t) {
       if (!(usable[h][t] = scale_detail::usableFrame(T_w_c, hands[h], t))) continue;
-      x[h][t] = (T_w_c[t].rotation() * hands[h].positionCam[t]).template cast<double>();
+      hc[h][t] = hands[h].positionCam[t].template cast<double>();
+      x[h][t] = T_w_c[t].rotation().template cast<double>() * hc[h][t];
       const double n = x[h][t].norm();
       u[h][t] = n > 0 ? Eigen::Vector3d(x[h][t] / n) : Eigen::Vector3d::Zero();
     }
@@ -110,7 +116,27 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   res.noiseAlongRay = Scalar(sRay);
   res.noiseAcrossRay = Scalar(sAcross);
   const double wAcross = 1 / (sAcross * sAcross), wRay = 1 / (sRay * sRay) - wAcross;
+  const double norm = 1.0 / double(3 * W - 3);
+  const double tau = double(opt.tau);
+  // RSS of points y_i about their Λ_i-weighted mean (the still point eliminated), Λ_i from rays r_i.
+  auto stillRss = [&](const std::vector<Eigen::Vector3d>& y, const std::vector<Eigen::Vector3d>& r, std::size_t s, std::size_t t) {
+    Eigen::Vector3d ym = Eigen::Vector3d::Zero();
+    for (std::size_t i = s; i <= t; ++i) ym += y[i];
+    ym /= double(t + 1 - s);
+    Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    double yy = 0;
+    for (std::size_t i = s; i <= t; ++i) {
+      const Eigen::Vector3d yt = y[i] - ym, Ly = (wAcross * Eigen::Matrix3d::Identity() + wRay * r[i] * r[i].transpose()) * yt;
+      M += wAcross * Eigen::Matrix3d::Identity() + wRay * r[i] * r[i].transpose(), b += Ly, yy += yt.dot(Ly);
+    }
+    return yy - b.dot(Eigen::LDLT<Eigen::Matrix3d>(M).solve(b));
+  };
   for (std::size_t h = 0; h < H; ++h) {
+    std::vector<Eigen::Vector3d> rc(T, Eigen::Vector3d::Zero());  // the rays in the camera frame
+    for (std::size_t t = 0; t < T; ++t) {
+      if (usable[h][t] && hc[h][t].norm() > 0) rc[t] = hc[h][t].normalized();
+    }
     const std::vector<char>& ok = usable[h];
     const std::vector<Eigen::Vector3d>& xh = x[h];
     const std::vector<Eigen::Vector3d>& uh = u[h];
@@ -119,6 +145,12 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
       run = ok[t] ? run + 1 : 0;
       if (run < W) continue;
       const std::size_t s = t + 1 - W;
+      // A hand still in the camera frame (carried with the head) says nothing about α, but looks
+      // still in the world at a small α: left out.
+      if (stillRss(hc[h], rc, s, t) * norm < tau) {
+        ++res.carriedWindows;
+        continue;
+      }
       // Centre on the plain means first (RSS is shift-invariant: p_w absorbs it) against
       // cancellation, then eliminate p_w with the Λ-weighted sums.
       Eigen::Vector3d xm = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
@@ -144,8 +176,6 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   double sxx = 0, scc = 0;
   for (const Win& w : wins) sxx += w.xx, scc += w.cc;
   if (!(scc > 0) || !(sxx > 0)) return res;
-  const double norm = 1.0 / double(3 * W - 3);
-  const double tau = double(opt.tau);
   auto q = [&](const Win& w, double a) { return (w.xx + 2 * a * w.xc + a * a * w.cc) * norm; };
   // Consensus scan: f(α_k) on the log-spaced samples, then its local minima (the first sample of
   // a flat run), best first.

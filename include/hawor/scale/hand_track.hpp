@@ -26,6 +26,7 @@ struct HandScaleResult {
   std::string method;    ///< "holds" or "smoothness": the cue that gave the scale
   int residuals = 0;     ///< smoothness: second-difference residuals; holds: windows examined
   int restFrames = 0;    ///< smoothness: velocity residuals of resting hands; holds: windows held
+  int carriedWindows = 0;  ///< holds: windows left out, the hand still in the camera frame
   /// holds: the estimated noise of the hand positions along and across the viewing ray (metres)
   Scalar noiseAlongRay = std::numeric_limits<Scalar>::quiet_NaN();
   Scalar noiseAcrossRay = std::numeric_limits<Scalar>::quiet_NaN();
