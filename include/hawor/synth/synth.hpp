@@ -10,6 +10,7 @@
 #include "hand_rig.hpp"
 #include "hand_motion.hpp"
 #include "renderer.hpp"
+#include "capture_options.hpp"
 #include "capture.hpp"
 #include "presets.hpp"
 #include "sequence.hpp"
