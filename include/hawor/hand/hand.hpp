@@ -7,6 +7,7 @@
 #include "portable_random.hpp"
 #include "forward.hpp"
 #include "mirror.hpp"
+#include "pickle_value.hpp"
 #include "pickle.hpp"
 #include "mano_loader.hpp"
 #include "default_hand.hpp"
