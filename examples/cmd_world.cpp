@@ -222,10 +222,10 @@ int cmdWorld(int argc, char** argv) {
   }
   GivenHand hands[2];
   bool joints = input == HandsInput::Joints;
-  for (int pass = 0; pass < 2; ++pass) {
-    for (int s = 0; s < 2; ++s) hands[s] = readGivenHand(z, kSides[s], T, models[s].model, joints);
-    if (hands[0].present() || hands[1].present() || input != HandsInput::Auto || joints) break;
+  for (int s = 0; s < 2; ++s) hands[s] = readGivenHand(z, kSides[s], T, models[s].model, joints);
+  if (input == HandsInput::Auto && !hands[0].present() && !hands[1].present()) {
     joints = true;  // auto: parameters when the file has them, else joints
+    for (int s = 0; s < 2; ++s) hands[s] = readGivenHand(z, kSides[s], T, models[s].model, joints);
   }
   if (!hands[0].present() && !hands[1].present()) {
     throw hawor::Error(handsPath + (joints ? ": no hand joints (no left_joints_cam / right_joints_cam; see hawor world --help)"

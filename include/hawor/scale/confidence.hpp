@@ -19,4 +19,11 @@ inline double confidenceLogError(double c) {
   return c > 0 ? 0.05 * std::sqrt(std::max(0.0, 1.0 / std::min(c, 1.0) - 1.0)) : std::numeric_limits<double>::infinity();
 }
 
+/// Whether two positive scale readings a, b of confidences ca, cb agree within 3 standard errors
+/// of their difference in log: |log(a/b)| ≤ 3·√(e_a² + e_b²).
+inline bool scalesAgree(double a, double ca, double b, double cb) {
+  const double ea = confidenceLogError(ca), eb = confidenceLogError(cb);
+  return std::abs(std::log(a / b)) <= 3 * std::sqrt(ea * ea + eb * eb);
+}
+
 }  // namespace hawor

@@ -68,11 +68,9 @@ FusedScale<Scalar> fuseScaleCues(const std::vector<ScaleCue<Scalar>>& cues) {
   }
   if (have.size() > 1) {  // left out: those inconsistent with the most confident
     const ScaleCue<Scalar>* best = *std::max_element(have.begin(), have.end(), [](const auto* a, const auto* b) { return a->confidence < b->confidence; });
-    const double eb = confidenceLogError(double(best->confidence));
     std::vector<const ScaleCue<Scalar>*> kept;
     for (const auto* c : have) {
-      const double e = confidenceLogError(double(c->confidence));
-      if (c == best || std::abs(std::log(double(c->scale) / double(best->scale))) <= 3 * std::sqrt(e * e + eb * eb)) {
+      if (c == best || scalesAgree(double(c->scale), double(c->confidence), double(best->scale), double(best->confidence))) {
         kept.push_back(c);
       } else {
         char buf[96];

@@ -340,9 +340,8 @@ template <typename Scalar>
 Scalar groundReadingNear(const GroundScaleResult<Scalar>& g, Scalar near, Scalar nearConfidence = Scalar(1)) {
   if (!g.ok()) return std::numeric_limits<Scalar>::quiet_NaN();
   if (g.ambiguous && std::isfinite(double(near)) && near > Scalar(0) && g.alternativeScale > Scalar(0)) {
-    const double toAlt = std::abs(std::log(double(g.alternativeScale / near))), eg = confidenceLogError(double(g.confidence)),
-                 en = confidenceLogError(double(nearConfidence));
-    if (toAlt < std::abs(std::log(double(g.scale / near))) && toAlt <= 3 * std::sqrt(eg * eg + en * en)) return g.alternativeScale;
+    const bool nearer = std::abs(std::log(double(g.alternativeScale / near))) < std::abs(std::log(double(g.scale / near)));
+    if (nearer && scalesAgree(double(g.alternativeScale), double(g.confidence), double(near), double(nearConfidence))) return g.alternativeScale;
   }
   return g.scale;
 }

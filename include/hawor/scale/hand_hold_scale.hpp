@@ -118,6 +118,8 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
   const double wAcross = 1 / (sAcross * sAcross), wRay = 1 / (sRay * sRay) - wAcross;
   const double norm = 1.0 / double(3 * W - 3);
   const double tau = double(opt.tau);
+  // Λ of a frame whose unit ray is r (file comment).
+  auto information = [&](const Eigen::Vector3d& r) -> Eigen::Matrix3d { return wAcross * Eigen::Matrix3d::Identity() + wRay * r * r.transpose(); };
   // RSS of points y_i about their Λ_i-weighted mean (the still point eliminated), Λ_i from rays r_i.
   auto stillRss = [&](const std::vector<Eigen::Vector3d>& y, const std::vector<Eigen::Vector3d>& r, std::size_t s, std::size_t t) {
     Eigen::Vector3d ym = Eigen::Vector3d::Zero();
@@ -127,8 +129,9 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
     double yy = 0;
     for (std::size_t i = s; i <= t; ++i) {
-      const Eigen::Vector3d yt = y[i] - ym, Ly = (wAcross * Eigen::Matrix3d::Identity() + wRay * r[i] * r[i].transpose()) * yt;
-      M += wAcross * Eigen::Matrix3d::Identity() + wRay * r[i] * r[i].transpose(), b += Ly, yy += yt.dot(Ly);
+      const Eigen::Matrix3d L = information(r[i]);
+      const Eigen::Vector3d yt = y[i] - ym, Ly = L * yt;
+      M += L, b += Ly, yy += yt.dot(Ly);
     }
     return yy - b.dot(Eigen::LDLT<Eigen::Matrix3d>(M).solve(b));
   };
@@ -160,7 +163,7 @@ HandScaleResult<Scalar> handHoldScale(const std::vector<SE3<Scalar>>& T_w_c, con
       Eigen::Vector3d bx = Eigen::Vector3d::Zero(), bc = Eigen::Vector3d::Zero();
       Win w{0, 0, 0};
       for (std::size_t i = s; i <= t; ++i) {
-        const Eigen::Matrix3d L = wAcross * Eigen::Matrix3d::Identity() + wRay * uh[i] * uh[i].transpose();
+        const Eigen::Matrix3d L = information(uh[i]);
         const Eigen::Vector3d xt = xh[i] - xm, ct = c[i] - cm, Lx = L * xt, Lc = L * ct;
         M += L, bx += Lx, bc += Lc;
         w.xx += xt.dot(Lx), w.xc += xt.dot(Lc), w.cc += ct.dot(Lc);
