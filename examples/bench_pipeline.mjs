@@ -5,7 +5,7 @@
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
 //        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
-//        [--tracker JSON] [--capture clean,phone,...] [--readout]
+//        [--tracker JSON] [--capture clean,phone,...] [--readout] [--flow-max-skip 0[,3]]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
 // by ffmpeg, decoded back exactly as `web/cli.mjs run` does), then runPipeline with the true
@@ -35,6 +35,9 @@
 // profile's rolling-shutter readout (capture.json's readout_s; runPipeline's options.readout). Each row also has handDepth per hand: the median ratio of the fitted
 // camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
 // fitted and the true depth (what the hand-anchored scale has to work with).
+// --flow-max-skip N: runPipeline's flow.maxSkip (the keypoint flow stands in for the landmark
+// network on up to N frames in a row); the table's flow column: N (landmark runs / flow hands);
+// --flow '{"minInliers":6}': the flow's other options.
 // Timing: median over sequences of each stage's ms per frame.
 
 import { execFileSync } from 'node:child_process';
@@ -76,6 +79,8 @@ function parse(argv) {
     else if (a === '--capture') o.captures = v().split(',');
     else if (a === '--readout') o.readout = true;
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
+    else if (a === '--flow-max-skip') o.flowMaxSkip = v().split(',').map(Number);
+    else if (a === '--flow') o.flow = JSON.parse(v());
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
     else if (a === '--refine-focal') o.refineFocal = v().split(',').map((x) => x === 'on');
     else throw new Error(`unknown argument ${a}`);
@@ -270,14 +275,14 @@ async function main() {
       const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
       const gtCam = readTumPositions(join(seq.dir, 'camera_gt.tum'));
       const info = probeVideo(join(seq.dir, 'video.mp4'));
-      for (const mode of o.modes) for (const factor of o.focalFactors ?? [null]) for (const refine of o.refineFocal ?? [true]) for (const smooth of o.handSmooth ?? [0]) {
+      for (const mode of o.modes) for (const factor of o.focalFactors ?? [null]) for (const refine of o.refineFocal ?? [true]) for (const smooth of o.handSmooth ?? [0]) for (const flow of o.flowMaxSkip ?? [null]) {
         const timing = { decode: 0 };
         const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         // the generator's world is the first camera's: the output in that frame too
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads, gravityAligned: false,
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
-          ...(o.tracker ? { tracker: o.tracker } : {}),
+          ...(o.tracker ? { tracker: o.tracker } : {}), ...(flow !== null || o.flow ? { flow: { ...(o.flow ?? {}), ...(flow !== null ? { maxSkip: flow } : {}) } } : {}),
           ...(seq.lens !== 'pinhole' ? { camera: seq.lens } : {}),
           ...(o.readout ? { readout: seq.readout } : {}),
           ...(o.fov ? { fovDeg: o.fov } : factor ? { fovDeg: (2 * Math.atan(0.5 * Math.hypot(info.width, info.height) / (factor * fxVideo)) * 180) / Math.PI } : { focalPx: fxVideo }) };
@@ -290,7 +295,8 @@ async function main() {
         const T = result.frameCount;
         const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
         const row = {
-          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}${o.readout && seq.readout > 0 ? ` (readout ${1000 * seq.readout} ms)` : ''}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth,
+          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}${o.readout && seq.readout > 0 ? ` (readout ${1000 * seq.readout} ms)` : ''}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth, flowMaxSkip: flow,
+          landmarkRuns: result.stats.landmarkRuns, flowHands: result.stats.flowHands,
           focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: fxVideo, focalRefined: result.intrinsics.refined,
           focalStd: result.intrinsics.focalStd, focalEstimate: result.intrinsics.focalEstimateFx, focalReason: result.intrinsics.focalReason,
           found: `${ev.perHand.left.observed + ev.perHand.right.observed}/${ev.perHand.left.inView + ev.perHand.right.inView}`,
@@ -310,10 +316,10 @@ async function main() {
   }
   const f = (v, d = 1) => (Number.isFinite(v) ? v.toFixed(d) : '–');
   console.log(`\n${o.size}, ${o.frames} frames, ${o.model} networks, ${o.threads} threads, focal ${o.fov ? `from a ${o.fov}° diagonal FOV` : 'true'}; simulated noise ${o.noisePx} px / ${o.noiseMm} mm`);
-  console.log('| sequence | mode | found | swaps | PA-MPJPE | W-MPJPE | WA-MPJPE | RTE % | Accel | ATE | ATE-S | α/α_true | ms/frame |');
-  console.log('| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |');
+  console.log('| sequence | mode | flow | found | swaps | PA-MPJPE | W-MPJPE | WA-MPJPE | RTE % | Accel | ATE | ATE-S | α/α_true | ms/frame |');
+  console.log('| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |');
   for (const r of rows) {
-    console.log(`| ${r.sequence} | ${r.mode} | ${r.found} | ${r.swaps} | ${f(r.pa_mpjpe)} | ${f(r.w_mpjpe)} | ${f(r.wa_mpjpe)} | ${f(r.rte, 2)} | ${f(r.accel, 2)} | ${f(r.ate)} | ${f(r.ate_s)} | ${f(r.scale, 3)} (${r.scaleMethod}) | ${f(r.wallMsPerFrame, 0)} |`);
+    console.log(`| ${r.sequence} | ${r.mode} | ${r.flowMaxSkip ?? '–'} (${r.landmarkRuns ?? '–'} / ${r.flowHands ?? '–'}) | ${r.found} | ${r.swaps} | ${f(r.pa_mpjpe)} | ${f(r.w_mpjpe)} | ${f(r.wa_mpjpe)} | ${f(r.rte, 2)} | ${f(r.accel, 2)} | ${f(r.ate)} | ${f(r.ate_s)} | ${f(r.scale, 3)} (${r.scaleMethod}) | ${f(r.wallMsPerFrame, 0)} |`);
   }
   if (o.focalFactors || o.refineFocal) {
     console.log('\n| sequence | mode | guess/true | refine | focal out/true | error % | std % | ATE | ATE-S | α/α_true | reason |');

@@ -10,6 +10,7 @@
 //
 //   node examples/bench_real.mjs [--video CLIP] [--labels JSON] [--work DIR] [--json OUT]
 //        [--variants a,b,c] [--jobs N] [--threads N] [--reuse-runs] [--hawor BIN] [--core FILE]
+//        [--run-args "ARGS"] (more arguments of each `web/cli.mjs run`, e.g. "--flow-max-skip 3")
 //        [--colmap-threads N] [--colmap-camera radial|fixed] [--passes N] [--list] [--make-only]
 //
 // Dependencies: Debian's ffmpeg (as the CLI), the native tool (build/native/examples/hawor, for
@@ -508,6 +509,7 @@ function runPipelineCli(file, outDir, o) {
     mkdirSync(outDir, { recursive: true });
     const args = [join(repo, 'web', 'cli.mjs'), 'run', file, '--out', outDir, '--threads', String(o.threads)];
     if (o.core) args.push('--core', o.core);
+    if (o.runArgs) args.push(...o.runArgs);
     const t0 = performance.now();
     const p = spawn(process.execPath, args, { stdio: ['ignore', 'pipe', 'pipe'] });
     let stdout = '';
@@ -558,6 +560,7 @@ function parse(argv) {
     else if (a === '--reuse-runs') o.reuse = true;
     else if (a === '--hawor') o.hawor = v();
     else if (a === '--core') o.core = v();
+    else if (a === '--run-args') o.runArgs = v().split(/\s+/).filter(Boolean);
     else if (a === '--colmap') o.colmap = v();
     else if (a === '--colmap-threads') o.colmapThreads = Number(v());
     else if (a === '--colmap-camera') { o.colmapCamera = v(); if (!['radial', 'fixed'].includes(o.colmapCamera)) throw new Error('--colmap-camera must be radial or fixed'); }

@@ -5,15 +5,26 @@
 //       intrinsics [fx, fy, cx, cy] (the video's), width, height, lens?, fps?, readout?,
 //       slamMaxSide?, maskDilatePx?, refineFocal?, focalPriorSigma?, userFocal?, focalMaxPasses?,
 //       focalRerunBytes?, set? (SlamOptions "NAME=VALUE,..."), infill? ('spline'|'lerp'|'last'),
-//       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks?, gravityAligned? }   (pipeline/options.hpp)
+//       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks?, gravityAligned?,
+//       flow?: {maxSkip, maxCorners, minInliers, minInlierRatio, inlierShare, reach, goodError,
+//       badError, pyramidLevels, maskGrowth} (any subset) }   (pipeline/options.hpp, keypoint_flow.hpp)
 //     .slamSize() -> {width, height, intrinsics: [fx, fy, cx, cy]} (the SLAM's virtual camera)
+//     .predict(frame) -> [{track, keypoints2d (42), keypoints3d (63) | null, pRight, inliers,
+//           trusted}] the last frame's hands carried to this one (pipeline/keypoint_flow.hpp;
+//           [] with the flow off); call before push() with the same frame
 //     .push(frame: Uint8Array (width*height*c, c = 1, 3, 4; or the SLAM's grey frame),
-//           detections: [{keypoints2d (42), keypoints3d (63) | null, pRight, track (-1: none)}])
+//           detections: [{keypoints2d (42), keypoints3d (63) | null, pRight, track (-1: none),
+//           flow (a prediction standing in for the network)}])
 //       -> {slamStatus, detection: Int32Array(2) (index per side, -1 none), valid: Uint8Array(2)}
 //     .pushHands(frame, {left: pose | null, right: pose | null}) -> the same (camera-frame hands
 //       from another regressor; pose objects as HandModel.forward takes)
 //     .pushJoints(frame, {left: joints (63) | null, right: ...}) -> the same (camera-frame 3D
 //       joints from another regressor, metres, 21 in MediaPipe order; the model fitted to them)
+//     .updateLiveWorld() -> {frames, scale, scaleMethod, scaleConfidence, up, upConfidence, origin}
+//       the causal world from the frames so far (live mode; every second or so)
+//     .live() -> {frame, posed, scale, cameraRotation (9, row-major), cameraPosition (3),
+//       valid: Uint8Array(2), joints: {left: Float64Array(63) | null, right}} the last frame in
+//       that world (camera to world; the fitted keypoints)
 //     .finishCamera() -> {keyframeFrames: Int32Array, initialised}
 //     .finish(depthMaps: [Float32Array (SLAM width*height)] | null) -> the result (run.mjs's
 //       header: intrinsics' focal fields, slam, world, camera, points, scale, hands, noHands, warnings,
@@ -77,6 +88,7 @@ std::vector<hawor::HandDetection<double>> detectionsFrom(const val& detections) 
     }
     if (!absent(d["pRight"])) h.pRight = d["pRight"].as<double>();
     if (!absent(d["track"])) h.track = d["track"].as<int>();
+    if (!absent(d["flow"])) h.flow = d["flow"].as<bool>();
     dets.push_back(std::move(h));
   }
   return dets;
@@ -211,6 +223,21 @@ hawor::PipelineOptions<double> optionsFrom(const val& o) {
   num("eyeHeight", p.eyeHeight);
   flag("depthMasks", p.depthMasks);
   flag("gravityAligned", p.gravityAligned);
+  if (!absent(o["flow"])) {  // KeypointFlowOptions, any subset
+    const val f = o["flow"];
+    auto fi = [&](const char* k, int& v) { if (!absent(f[k])) v = f[k].as<int>(); };
+    auto fd = [&](const char* k, double& v) { if (!absent(f[k])) v = f[k].as<double>(); };
+    fi("maxSkip", p.flow.maxSkip);
+    fi("maxCorners", p.flow.maxCorners);
+    fi("minInliers", p.flow.minInliers);
+    fd("minInlierRatio", p.flow.minInlierRatio);
+    fd("inlierShare", p.flow.inlierShare);
+    fd("reach", p.flow.reach);
+    fd("goodError", p.flow.goodError);
+    fd("badError", p.flow.badError);
+    fi("pyramidLevels", p.flow.pyramidLevels);
+    fd("maskGrowth", p.flow.maskGrowth);
+  }
   return p;
 }
 
@@ -227,6 +254,24 @@ class Pipeline {
     const double k[4] = {s.fx, s.fy, s.cx, s.cy};
     o.set("intrinsics", f64(k, 4));
     return o;
+  }
+
+  val predict(const val& frame) {
+    return guard("Pipeline.predict", [&] {
+      const hawor::ImageU8 im = frameFrom(frame, p_);
+      val out = val::array();
+      for (const hawor::KeypointPrediction<double>& q : p_.predict(im)) {
+        val o = val::object();
+        o.set("track", q.track);
+        o.set("keypoints2d", f64(q.keypoints2d.data(), 42));
+        o.set("keypoints3d", q.keypoints3d.rows() == 21 ? f64(q.keypoints3d.data(), 63) : val::null());
+        o.set("pRight", q.pRight);
+        o.set("inliers", q.inliers);
+        o.set("trusted", q.trusted);
+        out.call<void>("push", o);
+      }
+      return out;
+    });
   }
 
   val push(const val& frame, const val& detections) {
@@ -265,6 +310,42 @@ class Pipeline {
         given[s] = &X[s];
       }
       return info(p_.pushJoints(im, given));
+    });
+  }
+
+  val updateLiveWorld() {
+    return guard("Pipeline.updateLiveWorld", [&] {
+      const hawor::LiveWorld<double>& w = p_.updateLiveWorld();
+      val o = val::object();
+      o.set("frames", w.frames);
+      o.set("scale", w.scale);
+      o.set("scaleMethod", w.scaleMethod);
+      o.set("scaleConfidence", w.scaleConfidence);
+      o.set("up", w.world.up);
+      o.set("upConfidence", w.world.upConfidence);
+      o.set("origin", w.world.originOnFloor ? std::string("floor") : std::string("first-camera"));
+      return o;
+    });
+  }
+
+  val live() const {
+    return guard("Pipeline.live", [&] {
+      const hawor::LiveFrame<double> l = p_.live();
+      val o = val::object();
+      o.set("frame", l.frame);
+      o.set("posed", l.posed);
+      o.set("scale", l.scale);
+      const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R = l.cameraPose.rotation().matrix();
+      const Eigen::Vector3d t = l.cameraPose.translation();
+      o.set("cameraRotation", f64(R.data(), 9));
+      o.set("cameraPosition", f64(t.data(), 3));
+      const uint8_t v[2] = {uint8_t(l.valid[0]), uint8_t(l.valid[1])};
+      o.set("valid", toTyped(v, 2, "Uint8Array"));
+      val j = val::object();
+      j.set("left", l.valid[0] ? f64(l.joints[0].data(), 63) : val::null());
+      j.set("right", l.valid[1] ? f64(l.joints[1].data(), 63) : val::null());
+      o.set("joints", j);
+      return o;
     });
   }
 
@@ -342,9 +423,12 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
   emscripten::class_<Pipeline>("Pipeline")
       .constructor(&newPipeline, allow_raw_pointers())
       .function("slamSize", &Pipeline::slamSize)
+      .function("predict", &Pipeline::predict)
       .function("push", &Pipeline::push)
       .function("pushHands", &Pipeline::pushHands)
       .function("pushJoints", &Pipeline::pushJoints)
+      .function("updateLiveWorld", &Pipeline::updateLiveWorld)
+      .function("live", &Pipeline::live)
       .function("finishCamera", &Pipeline::finishCamera)
       .function("finish", &Pipeline::finish);
   emscripten::class_<SideAssigner>("SideAssigner").constructor<double>().function("assign", &SideAssigner::assign);

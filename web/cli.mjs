@@ -5,7 +5,7 @@
 //   hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera LENS] [--readout S] [--no-refine-focal] [--mano DIR]
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
-//        [--eye-height M | --no-ground-scale] [--first-camera-world]
+//        [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]
 //   (`hawor` is the npm package's bin; in a checkout: node web/cli.mjs ...)
 //
 // --sample runs the built-in synthetic sample (sample.webm, 60 frames of a table scene) with its
@@ -45,7 +45,7 @@ import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
-const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world]';
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]';
 
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
@@ -85,6 +85,7 @@ export function parseArgs(argv) {
     else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); const bad = eyeHeightError(o.eyeHeight); if (bad) throw usage(`--eye-height: ${bad}`); }
     else if (a === '--no-ground-scale') o.groundScale = false;
     else if (a === '--first-camera-world') o.gravityAligned = false;
+    else if (a === '--flow-max-skip') { o.flowMaxSkip = num(next(), '--flow-max-skip', -1); if (!Number.isInteger(o.flowMaxSkip) || o.flowMaxSkip > 30) throw usage('--flow-max-skip must be an integer from 0 to 30'); }
     else if (a === '--help' || a === '-h') return { help: true };
     else if (a.startsWith('--')) throw usage(`unknown option '${a}'`);
     else if (!o.video) o.video = a;
@@ -322,7 +323,7 @@ export async function main(argv) {
   const result = await runPipeline(source, {
     core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
     handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, readout: o.readout, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
-    groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight, gravityAligned: o.gravityAligned ?? true,
+    groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight, gravityAligned: o.gravityAligned ?? true, ...(o.flowMaxSkip !== undefined ? { flow: { maxSkip: o.flowMaxSkip } } : {}),
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };

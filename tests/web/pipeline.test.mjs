@@ -14,7 +14,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { root, clipPath, clipSkipReason, modelsSkipReason } from './mediapipe_support.mjs';
 import { rng } from './support.mjs';
-import { defaultIntrinsics, toDetections, runPipeline, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
+import { defaultIntrinsics, toDetections, runPipeline, streamPipeline, MAX_PIXELS } from '../../web/src/pipeline/run.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from '../../web/src/pipeline/exports.mjs';
 
 const corePath = process.env.HAWOR_CORE ?? join(root, 'build/wasm/wasm/hawor_core.mjs');
@@ -419,6 +419,52 @@ test('pipeline CLI on a hawor synth sequence (table_work, seed 3, 60 frames, 640
   }
 });
 
+test('pipeline live mode (streamPipeline): causal estimates every frame that end near the refined result', { skip: skipOf(coreSkip, ffmpegSkip, synthSkip), timeout: 300000 }, async () => {
+  const { makeSequence, simulatedObservations } = await import('../../examples/bench_pipeline.mjs');
+  const { decodeFrames, probeVideo, handModelFiles } = await import('../../web/cli.mjs');
+  const dir = mkdtempSync(join(tmpdir(), 'hawor-live-'));
+  try {
+    const T = 75;
+    const seq = makeSequence(haworBin, 'table_work', 2, T, '640x480', join(dir, 'seq'));
+    const core = await loadCore();
+    const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
+    const info = probeVideo(join(seq.dir, 'video.mp4'));
+    const hm = handModelFiles({});
+    const frames = [];
+    let result = null;
+    for await (const item of streamPipeline({ width: info.width, height: info.height, fps: 30, frameCount: null,
+      frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, { decode: 0 }) },
+    { core, focalPx: seq.fx, handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)) },
+      observations: simulatedObservations(gt, seq, T, 2, 5, 7) })) {
+      if (item.type === 'frame') frames.push(item);
+      else result = item.result;
+    }
+    assert.equal(frames.length, T);
+    assert.ok(result && result.frameCount === T);
+    frames.forEach((f, t) => assert.equal(f.live.frame, t));
+    // the live world is updated once a second (every 30 frames) and has a metric scale by the end
+    assert.deepEqual(frames.filter((f) => f.world).map((f) => f.index), [29, 59]);
+    const w = frames[59].world;
+    assert.ok(w.scaleMethod !== 'none' && w.scale > 0, JSON.stringify(w));
+    // the last frame's causal camera and hands against the refined ones (same world convention)
+    let path = 0;
+    const P = result.camera.positions;
+    for (let t = 1; t < T; ++t) path += Math.hypot(P[3 * t] - P[3 * t - 3], P[3 * t + 1] - P[3 * t - 2], P[3 * t + 2] - P[3 * t - 1]);
+    const last = frames[T - 1].live;
+    const dc = Math.hypot(...[0, 1, 2].map((i) => last.cameraPosition[i] - P[3 * (T - 1) + i]));
+    assert.ok(dc < 0.1 * path + 0.02, `live camera ${dc} m from the refined one (path ${path} m)`);
+    for (const [s, k] of [['left', 0], ['right', 1]]) {
+      if (!last.valid[k] || !result.hands[s].valid[T - 1]) continue;
+      const J = result.hands[s].jointsWorld;
+      const d = Math.hypot(...[0, 1, 2].map((i) => last.joints[s][i] - J[63 * (T - 1) + i]));
+      assert.ok(d < 0.1 * path + 0.03, `${s} wrist: live ${d} m from the refined one`);
+    }
+    process.stdout.write(`# live vs refined at the last frame: camera ${(1000 * dc).toFixed(1)} mm over a ${path.toFixed(3)} m path; live scale ${w.scaleMethod} ${w.scale.toFixed(3)} (refined ${result.scale.method} ${result.scale.scale.toFixed(3)})\n`);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('pipeline CLI on the sample clip (first 40 frames): hands found, left on the left, a finite plausible camera', { skip: skipOf(coreSkip, clipSkipReason, modelsSkipReason), timeout: 300000 }, () => {
   const dir = mkdtempSync(join(tmpdir(), 'hawor-pipe-clip-'));
   try {
@@ -429,6 +475,9 @@ test('pipeline CLI on the sample clip (first 40 frames): hands found, left on th
     const count = (v) => v.reduce((a, b) => a + b, 0);
     const { left, right } = res.hands;
     assert.ok(count(left.valid) >= 20 && count(right.valid) >= 20, `left ${count(left.valid)}, right ${count(right.valid)} frames`);
+    // the keypoint flow stood in for the landmark network on some hand-frames (fewer runs than
+    // the frames with a hand need, candidate checks included)
+    assert.ok(res.stats.flowHands > 0 && res.stats.landmarkRuns < count(left.valid) + count(right.valid), JSON.stringify(res.stats));
     // left/right: on frames with both hands, the left wrist is left of the right one
     let both = 0; let ordered = 0;
     for (let t = 0; t < 40; ++t) {

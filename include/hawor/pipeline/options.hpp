@@ -10,6 +10,7 @@
 #include "hawor/common.hpp"
 #include "hawor/geometry/camera.hpp"
 #include "hawor/motion/infill.hpp"
+#include "hawor/pipeline/keypoint_flow.hpp"
 
 namespace hawor {
 
@@ -36,6 +37,9 @@ struct PipelineOptions {
   std::size_t focalRerunBytes = std::size_t(256) << 20;
   std::string slamSet;                   ///< "NAME=VALUE,..." over SlamOptions (ablations; slam_option_table.hpp)
   // --- hands ---
+  /// The keypoint flow (keypoint_flow.hpp): a hand's keypoints carried from the last frame by
+  /// KLT stand in for the landmark network on up to flow.maxSkip frames in a row (0: off).
+  KeypointFlowOptions<Scalar> flow;
   /// A fit is believed when its wrist lies this far in front of the camera (metres): behind the
   /// camera or absurdly far is not a hand.
   Scalar minHandDepth = Scalar(0.03), maxHandDepth = Scalar(5);
@@ -65,6 +69,7 @@ struct PipelineOptions {
     if (focalMaxPasses < 1) throw Error("pipeline: focalMaxPasses must be >= 1");
     if (!(minHandDepth >= Scalar(0) && maxHandDepth > minHandDepth)) throw Error("pipeline: need 0 <= minHandDepth < maxHandDepth");
     if (handScaleSmooth < 0) throw Error("pipeline: handScaleSmooth must be >= 0");
+    flow.validate();
     if (!(eyeHeight >= Scalar(0.8) && eyeHeight <= Scalar(3))) {
       throw Error("pipeline: the camera height above the floor must be between 0.8 and 3 m, not " + std::to_string(double(eyeHeight)));
     }

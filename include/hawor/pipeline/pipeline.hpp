@@ -46,6 +46,7 @@
 #include "hawor/motion/canonical.hpp"
 #include "hawor/motion/infill.hpp"
 #include "hawor/motion/rest_root.hpp"
+#include "hawor/pipeline/keypoint_flow.hpp"
 #include "hawor/pipeline/options.hpp"
 #include "hawor/pipeline/result.hpp"
 #include "hawor/pipeline/sides.hpp"
@@ -77,7 +78,7 @@ class Pipeline {
   };
 
   Pipeline(const PipelineOptions<Scalar>& options, const HandModel<Scalar>& left, const HandModel<Scalar>& right)
-      : opt_(options), models_{&left, &right}, fitters_{HandFitter<Scalar>(left), HandFitter<Scalar>(right)} {
+      : opt_(options), models_{&left, &right}, fitters_{HandFitter<Scalar>(left), HandFitter<Scalar>(right)}, flow_(options.flow) {
     opt_.validate();
     for (int s = 0; s < 2; ++s) {
       if (models_[s]->numKeypoints() != kKeypoints) {
@@ -104,11 +105,40 @@ class Pipeline {
   const PinholeCamera<Scalar>& slamCamera() const { return slamCam_; }
   int frames() const { return static_cast<int>(frames_.size()); }
 
+  /// The next frame's hands predicted from the last frame's by the keypoint flow
+  /// (keypoint_flow.hpp), before the perception runs on it: those marked trusted may stand in
+  /// for the landmark network (given back to push() with `flow` set). Call with the image that
+  /// push() then gets; push() reuses its grey frame. Empty when the flow is off.
+  const std::vector<KeypointPrediction<Scalar>>& predict(const ImageU8& image) {
+    static const std::vector<KeypointPrediction<Scalar>> none;
+    if (!flow_.enabled()) return none;
+    checkFrame(image);
+    const auto t0 = Clock::now();
+    const int index = frames();
+    const ImageU8* g = &image;
+    if (image.channels != 1 || image.width != slamCam_.width || image.height != slamCam_.height) {
+      grey_.resize(slamCam_.width, slamCam_.height, 1);
+      downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
+      g = &grey_;
+      greyFor_ = index;
+    }
+    flow_.setFrame(*g, index, Scalar(slamCam_.width) / Scalar(opt_.camera.width));
+    predictedFor_ = index;
+    const auto& p = flow_.predict();
+    addTime("flow", t0);
+    return p;
+  }
+
   /// A frame with the perception's detections. `image`: the video frame (the options' size; grey,
   /// RGB or RGBA) or its grey plane at the SLAM's size.
   FrameInfo push(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
     checkFrame(image);
     for (std::size_t i = 0; i < detections.size(); ++i) checkDetection(detections[i], i);
+    if (predictedFor_ == frames()) {
+      std::vector<char> byFlow(detections.size());
+      for (std::size_t i = 0; i < detections.size(); ++i) byFlow[i] = detections[i].flow ? 1 : 0;
+      flow_.observe(detections, byFlow);
+    }
     frames_.emplace_back();
     const auto t0 = Clock::now();
     const std::array<int, 2> sides = assignSides(detections, sideState_, reach());
@@ -125,6 +155,7 @@ class Pipeline {
       Side& o = f.side[s];
       o.detected = true;
       o.keypoints2d = d.keypoints2d;
+      o.byFlow = d.flow;
       o.keypoints3d = d.keypoints3d;
       o.fitted = fitSide(s, o, opt_.camera, true);
       info.valid[s] = o.fitted;
@@ -210,6 +241,64 @@ class Pipeline {
     addTime("fit", t0);
     info.slamStatus = trackFrame(image);
     return info;
+  }
+
+  /// The causal world (live mode): the metric scale and the gravity-aligned world from the cues
+  /// of the frames so far (the tracker's poses and map, the fitted hands; no depth network), as
+  /// finish() computes them from the refined ones. Until a cue gives a scale: the SLAM's units
+  /// (method "none") in the first camera's frame. Costs a scale estimate: call every second or so.
+  const LiveWorld<Scalar>& updateLiveWorld() {
+    if (cameraDone_) throw Error("pipeline: updateLiveWorld() after finishCamera()");
+    const auto t0 = Clock::now();
+    LiveWorld<Scalar> w;
+    w.frames = frames();
+    std::vector<SE3<Scalar>> poses;
+    for (int f = 0; f < slam_->numFrames(); ++f) poses.push_back(slam_->livePose(f));
+    const std::vector<Vec3<Scalar>> points = opt_.groundScale ? slam_->liveMapPoints() : std::vector<Vec3<Scalar>>();
+    const std::vector<HandTrack<Scalar>> wrists = wristTracks();
+    if (poses.size() >= 2 && (!wrists.empty() || !points.empty())) {
+      MetricScaleOptions<Scalar> mo;
+      mo.setFps(opt_.fps);
+      mo.ground.eyeHeight = opt_.eyeHeight;
+      try {
+        const MetricScaleResult<Scalar> r = estimateMetricScale({}, poses, wrists, mo, &points);
+        if (r.fused.ok() && std::isfinite(double(r.fused.scale)) && r.fused.scale > Scalar(0)) {
+          w.scale = r.fused.scale;
+          w.scaleMethod = r.fused.method;
+          w.scaleConfidence = r.fused.confidence;
+          if (opt_.gravityAligned) {
+            std::vector<SE3<Scalar>> metric;
+            for (const SE3<Scalar>& P : poses) metric.emplace_back(P.rotation(), Vec3<Scalar>(w.scale * P.translation()));
+            w.world = gravityAlignedWorld(metric, r.groundRan ? &r.ground : nullptr, w.scale);
+          }
+        }
+      } catch (const std::exception&) {
+        // too little of the clip yet (a cue's own checks): stay in the SLAM's units
+      }
+    }
+    live_ = std::move(w);
+    addTime("liveWorld", t0);
+    return live_;
+  }
+
+  /// The last pushed frame in the live world (updateLiveWorld's latest; causal estimates).
+  LiveFrame<Scalar> live() const {
+    LiveFrame<Scalar> l;
+    const int f = frames() - 1;
+    if (f < 0 || slam_->numFrames() != frames()) return l;
+    l.frame = f;
+    l.posed = slam_->livePosed(f);
+    l.scale = live_.scale;
+    const SE3<Scalar> P = slam_->livePose(f);
+    l.cameraPose = live_.world.fromFirstCamera * SE3<Scalar>(P.rotation(), Vec3<Scalar>(live_.scale * P.translation()));
+    for (int s = 0; s < 2; ++s) {
+      const Side& o = frames_.back().side[s];
+      l.valid[s] = o.fitted;
+      if (!o.fitted) continue;
+      l.joints[s].resize(kKeypoints, 3);
+      for (int k = 0; k < kKeypoints; ++k) l.joints[s].row(k) = (l.cameraPose * Vec3<Scalar>(o.keypoints.row(k).transpose())).transpose();
+    }
+    return l;
   }
 
   /// The SLAM's finishing passes, the further passes with a refined focal, and the hands fitted
@@ -323,6 +412,7 @@ class Pipeline {
   /// One side's observation in one frame.
   struct Side {
     bool detected = false, fitted = false;
+    bool byFlow = false;          ///< the keypoints came from the keypoint flow, not the network
     Pixels<Scalar> keypoints2d;   ///< (21, 2) image pixels (through the lens)
     Points3<Scalar> keypoints3d;  ///< (21, 3) the network's metric keypoints, or empty
     HandPose<Scalar> pose;        ///< camera frame (when fitted)
@@ -445,6 +535,22 @@ class Pipeline {
     }
     Mask mask;
     if (!hands.empty()) renderHandMasks(hands, slamCam_, opt_.maskDilatePx, mask);
+    // A hand whose keypoints the flow carried (its articulation held from an earlier frame) is
+    // masked wider, by the flow's expected error: fingers that moved since stay masked.
+    for (int s = 0; s < 2; ++s) {
+      const Side& o = f.side[s];
+      if (!o.fitted || !o.byFlow) continue;
+      const Scalar size = std::max(o.keypoints2d.col(0).maxCoeff() - o.keypoints2d.col(0).minCoeff(),
+                                   o.keypoints2d.col(1).maxCoeff() - o.keypoints2d.col(1).minCoeff());
+      const int grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * size * Scalar(slamCam_.width) / Scalar(opt_.camera.width)));
+      if (grow <= 0) continue;
+      HandMaskHand<Scalar> h;
+      h.model = models_[s];
+      h.pose = o.pose;
+      Mask wide;
+      renderHandMasks(std::vector<HandMaskHand<Scalar>>{h}, slamCam_, std::min(64, opt_.maskDilatePx + grow), wide);
+      for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = std::max(mask.data[i], wide.data[i]);
+    }
     if (opt_.depthMasks) depthMasks_.push_back(mask);
     addTime("masks", t0);
     t0 = Clock::now();
@@ -452,8 +558,10 @@ class Pipeline {
     // At the SLAM's own size the SLAM converts to grey itself.
     const ImageU8* slamFrame = &image;
     if (!atSlamSize || (withLens_ && image.channels != 1)) {
-      grey_.resize(slamCam_.width, slamCam_.height, 1);
-      downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
+      if (greyFor_ != frames() - 1) {  // predict() made it already
+        grey_.resize(slamCam_.width, slamCam_.height, 1);
+        downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
+      }
       slamFrame = &grey_;
     }
     const ImageU8* slamMask = mask.data.empty() ? nullptr : &mask;
@@ -549,21 +657,27 @@ class Pipeline {
   }
 
   /// The metric scale from the cues at hand; res.scale is 1 with method "none" when none gave one.
-  void metricScale(PipelineResult<Scalar>& res, const std::vector<const float*>& depthMaps) {
-    const int T = static_cast<int>(frames_.size());
+  /// Each seen hand's camera-frame wrist over the frames so far (the hand cues' input).
+  std::vector<HandTrack<Scalar>> wristTracks() const {
     std::vector<HandTrack<Scalar>> wrists;
     for (int s = 0; s < 2; ++s) {
-      const PipelineHand<Scalar>& h = res.hands[s];
-      if (!h.present) continue;
       HandTrack<Scalar> track;
-      for (int t = 0; t < T; ++t) {
-        const bool v = h.valid[static_cast<std::size_t>(t)] != 0;
-        track.positionCam.push_back(v ? Vec3<Scalar>(h.jointsCam(t, 0), h.jointsCam(t, 1), h.jointsCam(t, 2)) : Vec3<Scalar>(0, 0, 1));
-        track.valid.push_back(v ? 1 : 0);
+      bool any = false;
+      for (const Observed& f : frames_) {
+        const Side& o = f.side[s];
+        track.positionCam.push_back(o.fitted ? Vec3<Scalar>(o.keypoints.row(0).transpose()) : Vec3<Scalar>(0, 0, 1));
+        track.valid.push_back(o.fitted ? 1 : 0);
+        any = any || o.fitted;
       }
+      if (!any) continue;
       if (opt_.handScaleSmooth > 0) smoothTrack(track, opt_.handScaleSmooth);
       wrists.push_back(std::move(track));
     }
+    return wrists;
+  }
+
+  void metricScale(PipelineResult<Scalar>& res, const std::vector<const float*>& depthMaps) {
+    const std::vector<HandTrack<Scalar>> wrists = wristTracks();
     std::vector<KeyframeDepthPairs<Scalar>> keyframes;
     if (!depthMaps.empty()) {
       const auto& kd = slam_result_.keyframeDepths;
@@ -699,6 +813,9 @@ class Pipeline {
   std::size_t keptBytes_ = 0;
   std::vector<ImageU8> keptFrames_, keptMasks_;
   ImageU8 grey_, rectified_, rectMask_;
+  int greyFor_ = -1, predictedFor_ = -1;  ///< the frame grey_ holds and the one predict() saw
+  LiveWorld<Scalar> live_;
+  KeypointFlow<Scalar> flow_;
   int fitFailures_ = 0;
   bool handsGiven_ = false, cameraDone_ = false, finished_ = false;
   PipelineFocal<Scalar> focal_;

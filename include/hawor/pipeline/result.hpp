@@ -45,6 +45,29 @@ struct PipelineFocal {
   std::string reason;                      ///< why refined / kept / declined ("off" when not asked)
 };
 
+/// The causal world of live mode (Pipeline::updateLiveWorld): the scale and the gravity-aligned
+/// world from the frames so far; scale 1, method "none" and the first camera's frame until a cue
+/// gives one.
+template <typename Scalar>
+struct LiveWorld {
+  int frames = 0;                   ///< the frames it was computed from
+  Scalar scale = Scalar(1);         ///< metres per SLAM unit
+  std::string scaleMethod = "none";
+  Scalar scaleConfidence = Scalar(0);
+  WorldFrame<Scalar> world;         ///< identity until a scale is known (and with gravityAligned off)
+};
+
+/// The last frame in the live world (Pipeline::live).
+template <typename Scalar>
+struct LiveFrame {
+  int frame = -1;
+  bool posed = false;                          ///< the tracker's map posed the camera (else held or guessed)
+  Scalar scale = Scalar(1);                    ///< the live world's
+  SE3<Scalar> cameraPose;                      ///< camera to world
+  std::array<bool, 2> valid{false, false};     ///< left, right fitted on this frame
+  std::array<Points3<Scalar>, 2> joints;       ///< (21, 3) world, where valid
+};
+
 template <typename Scalar>
 struct PipelineResult {
   int frames = 0;

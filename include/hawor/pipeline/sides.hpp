@@ -31,6 +31,7 @@ struct HandDetection {
   Points3<Scalar> keypoints3d;       ///< (21, 3) metres, or empty
   Scalar pRight = Scalar(0.5);       ///< P(right hand): the track's evidence, else the label's
   int track = -1;                    ///< the tracker's id of this hand over frames (-1: none)
+  bool flow = false;                 ///< carried from the last frame (Pipeline::predict), not the network's
 };
 
 /// What assignSides remembers between frames: each side's last wrist, how many frames ago it was

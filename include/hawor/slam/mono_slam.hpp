@@ -282,6 +282,21 @@ class MonoSlam {
   /// the result in the first frame's world. Call once, after the last frame.
   SlamResult<Scalar> finish();
 
+  /// The tracker's causal estimates, before finish() refines them: frame f's camera-to-world
+  /// pose in the first frame's camera (after a reset, in the new map's world: it jumps), whether
+  /// a map posed it (else held or guessed), and the map's points in the same world.
+  SE3T livePose(int f) const { return frames_[0].T.inverse() * frames_.at(static_cast<std::size_t>(f)).T; }
+  bool livePosed(int f) const { return frames_.at(static_cast<std::size_t>(f)).posed; }
+  std::vector<V3> liveMapPoints() const {
+    std::vector<V3> X;
+    if (frames_.empty()) return X;
+    const SE3T T0inv = frames_[0].T.inverse();
+    for (const MapPoint& p : points_) {
+      if (p.valid) X.push_back(T0inv * p.X);
+    }
+    return X;
+  }
+
   int numFrames() const { return static_cast<int>(frames_.size()); }
   int numKeyframes() const { return static_cast<int>(keyframes_.size()); }
   int numLiveTracks() const { return static_cast<int>(tracks_.size()); }

@@ -19,6 +19,16 @@ import { cropBoxFiltered } from './prefilter.mjs';
 import { PALM_INPUT_SIZE, decodePalms, weightedNms, palmToImage, roiFromPalm } from './palm.mjs';
 import { LANDMARK_INPUT_SIZE, decodeLandmarks, roiFromLandmarks } from './landmarks.mjs';
 
+/** A hand as decodeLandmarks gives it, from the keypoint flow's prediction p for track st (its
+ *  presence and handedness the track's last network run's). */
+function flowHand(p, st) {
+  const landmarks = new Float64Array(63);
+  for (let k = 0; k < 21; ++k) { landmarks[3 * k] = p.keypoints2d[2 * k]; landmarks[3 * k + 1] = p.keypoints2d[2 * k + 1]; }
+  const pRight = 1 / (1 + Math.exp(-st.logOdds));
+  return { landmarks, world: p.keypoints3d ?? null, presence: st.presence ?? 1, handedness: pRight >= 0.5 ? 'right' : 'left',
+    handednessScore: Math.max(pRight, 1 - pRight) };
+}
+
 export class HandTracker {
   /**
    * @param ort          the onnxruntime namespace
@@ -74,7 +84,7 @@ export class HandTracker {
     this.trackStates = []; // their tracks (identity, handedness evidence, motion), see newTrack
     this.frame = 0;
     this.nextId = 1;
-    this.stats = { palmRuns: 0, landmarkRuns: 0 };
+    this.stats = { palmRuns: 0, landmarkRuns: 0, flowHands: 0, candidatesVerified: 0, candidatesKept: 0 };
   }
 
   /** Palm detections in image pixels, best first (weighted NMS, at most maxDetections). */
@@ -145,6 +155,10 @@ export class HandTracker {
     st.lastFrame = this.frame;
     st.frames += 1;
     st.misses = 0;
+    if (h.source === 'flow') { // no new handedness evidence
+      h.track = { id: st.id, pRight: 1 / (1 + Math.exp(-st.logOdds)), frames: st.frames };
+      return;
+    }
     const L = Math.log(0.95 / 0.05); // one frame's label flips now and then with full confidence
     const p = h.handedness === 'right' ? h.handednessScore : 1 - h.handednessScore;
     st.logOdds += Math.max(-L, Math.min(L, Math.log(p / (1 - p))));
@@ -170,9 +184,12 @@ export class HandTracker {
    * the detector only if fewer than maxHands remain, its palms added where they do not overlap a
    * tracked hand (IoU of the ROIs' bounding squares < 0.5) and their landmarks are not a hand
    * already found. Hands below minPresence are dropped. Returns [{...decodeLandmarks, source:
-   * 'track' | 'detect', track: {id, pRight, frames}}] and keeps their next ROIs.
+   * 'track' | 'detect' | 'flow', track: {id, pRight, frames}}] and keeps their next ROIs.
+   * predictions: the core's keypoint flow for this frame (Pipeline.predict: [{track, keypoints2d,
+   * keypoints3d, trusted}]); a trusted one is taken for its track's hand instead of running the
+   * landmark network ('flow').
    */
-  async track(image) {
+  async track(image, predictions = null) {
     this.frame += 1;
     const box = (r) => ({ cx: r.cx, cy: r.cy, w: Math.max(r.w, r.h), h: Math.max(r.w, r.h) });
     // tracks of this.tracked (a caller may set it: those start as new tracks)
@@ -198,7 +215,11 @@ export class HandTracker {
       });
     };
     for (const st of states) {
-      const h = await this.landmarks(image, this.searchRoi(st));
+      // the keypoint flow's prediction stands in for the network where the core trusts it
+      const flow = predictions ? predictions.find((p) => p.trusted && p.track === st.id) : null;
+      const h = flow ? flowHand(flow, st) : await this.landmarks(image, this.searchRoi(st));
+      if (flow) this.stats.flowHands += 1;
+      else st.presence = h.presence;
       if (h.presence < this.minPresence) {
         st.misses += 1;
         lost.push(st);
@@ -208,14 +229,14 @@ export class HandTracker {
       // of the next ROIs): keep the more confident landmarks, and the track that moved less
       const dup = sameHand(h);
       if (dup < 0) {
-        hands.push({ ...h, source: 'track' });
+        hands.push({ ...h, source: flow ? 'flow' : 'track' });
         owners.push(st);
         continue;
       }
       const c = roiFromLandmarks(h.landmarks);
       const moved = (s) => Math.hypot(c.cx - s.roi.cx, c.cy - s.roi.cy);
       if (moved(st) < moved(owners[dup])) owners[dup] = st;
-      if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: 'track' };
+      if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: flow ? 'flow' : 'track' };
     }
     const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap || (this.redetectOnLoss && lost.length > 0));
     this.framesWithoutDetect = detect ? 0 : this.framesWithoutDetect + 1;
@@ -229,6 +250,7 @@ export class HandTracker {
         const roi = roiFromPalm(palm);
         if (hands.some((h) => iou(box(roiFromLandmarks(h.landmarks)), box(roi)) >= 0.5)) continue;
         verified += 1;
+        this.stats.candidatesVerified += 1;
         const h = await this.landmarks(image, roi);
         if (h.presence < (palm.score >= this.minPalmScore ? this.minPresence : this.candidatePresence)) continue;
         const dup = sameHand(h);
@@ -238,6 +260,7 @@ export class HandTracker {
           if (h.presence > hands[dup].presence) hands[dup] = { ...h, palm, source: 'detect' };
           continue;
         }
+        this.stats.candidatesKept += 1;
         hands.push({ ...h, palm, source: 'detect' });
         owners.push(this.revive(lost, roiFromLandmarks(h.landmarks)) ?? this.newTrack(roi));
       }

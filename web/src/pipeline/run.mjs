@@ -80,6 +80,12 @@
 //           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
 //           detectGap? (1)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames
+//           flow? ({})                   the keypoint flow's options over the core's defaults
+//                                        (pipeline/keypoint_flow.hpp: a hand's keypoints carried
+//                                        from the last frame by KLT stand in for the landmark
+//                                        network on up to maxSkip = 5 frames in a row, as often as
+//                                        the network's later runs agree with them; maxSkip 0:
+//                                        the network on every frame)
 //           minPresence? (0.3)           the landmark network's hand presence to keep a hand
 //                                        (MediaPipe's 0.5 drops the wearer's hand gripping a
 //                                        plate on the kitchen clip; tests/web/kitchen_hands)
@@ -90,11 +96,22 @@
 //           eyeHeight? (1.6)             that height in metres (a standing adult's head camera;
 //                                        about 1.2 sitting)
 //           gravityAligned? (true)       the output's world z up with the origin on the floor
-//                                        below the first camera (false: the first camera's) }
+//                                        below the first camera (false: the first camera's)
+//           live? (false)                causal estimates per frame (live mode): frameInfo.live
+//                                        and, every liveWorldEvery frames, frameInfo.world
+//           liveWorldEvery? (fps)        frames between updates of the live world (its scale
+//                                        and gravity from the cues so far) }
 // hooks   { onProgress?({ stage, done, total }), onFrame?(frameInfo), signal?: AbortSignal }
 //         onFrame gets { index, hands: [{ side, valid, keypoints2d: Float64Array(42) }],
 //         slamStatus, ms } after each frame; an aborted signal throws an AbortError (checked
-//         before every frame and between the stages after the last one).
+//         before every frame and between the stages after the last one). With options.live
+//         also live: the core's Pipeline.live() (the frame's camera pose and fitted joints in the
+//         live world: { frame, posed, scale, cameraRotation (9), cameraPosition (3), valid,
+//         joints: { left, right } }) and, when it was updated on this frame, world:
+//         Pipeline.updateLiveWorld() ({ frames, scale, scaleMethod, scaleConfidence, up,
+//         upConfidence, origin, previous: { frame, scale, cameraRotation, cameraPosition } (this
+//         frame's camera in the live world before the update) }). streamPipeline gives the same
+//         as an async iterator.
 //
 // The result (what result.json holds; flat numeric arrays are typed arrays here, plain arrays
 // in the JSON; NaN becomes null in the JSON):
@@ -134,9 +151,12 @@
 //   faces: { left: Int32Array, right: Int32Array } (the hand meshes' triangles; the vertices
 //          of frame t: core.HandModel(bytes).forward({rot, handPose, betas, trans} of frame t)),
 //   timings: { stage: total ms, load: model loading }, warnings: [strings], noHands: bool,
-//   stats: { palmRuns, landmarkRuns } (the tracker's; {} with observations) }
+//   stats: { palmRuns, landmarkRuns, flowHands (hands the keypoint flow gave instead of the
+//            landmark network), candidatesVerified, candidatesKept (palm candidates checked by
+//            the landmark network, and found to be hands) } (the tracker's; {} with observations) }
 //
-// Stages (timings keys): perception (networks + crops), fit (hand fit per hand), masks (hand
+// Stages (timings keys): flow (the keypoint flow's predictions), perception (networks + crops),
+// fit (hand fit per hand), masks (hand
 // silhouettes at the SLAM resolution), slamPrep (downscale + grey, and the rectification with a
 // lens), slam (tracking + mapping),
 // slamFinish (final bundle adjustment), depth (optional), scale, world (camera -> world),
@@ -240,7 +260,7 @@ export function toDetections(dets) {
     const stride = d.landmarks.length === 63 ? 3 : 2;
     const kp2 = new Float64Array(2 * NUM_KP);
     for (let k = 0; k < NUM_KP; ++k) { kp2[2 * k] = d.landmarks[stride * k]; kp2[2 * k + 1] = d.landmarks[stride * k + 1]; }
-    return { keypoints2d: kp2, keypoints3d: d.world ? Float64Array.from(d.world) : null, pRight: pRight(d), track: d.track ? d.track.id : -1 };
+    return { keypoints2d: kp2, keypoints3d: d.world ? Float64Array.from(d.world) : null, pRight: pRight(d), track: d.track ? d.track.id : -1, flow: d.source === 'flow' };
   });
 }
 
@@ -357,7 +377,7 @@ export async function runPipeline(source, options, hooks = {}) {
       ...(options.handScaleSmooth !== undefined ? { handScaleSmooth: options.handScaleSmooth } : {}),
       ...(options.eyeHeight !== undefined ? { eyeHeight: options.eyeHeight } : {}),
       infill: options.infill ?? 'spline', groundScale: options.groundScale ?? true, depthMasks: !!depthModel,
-      gravityAligned: options.gravityAligned ?? true,
+      gravityAligned: options.gravityAligned ?? true, ...(options.flow ? { flow: options.flow } : {}),
     }, models.left, models.right);
     owned.push(pipeline);
     const ss = pipeline.slamSize();
@@ -392,7 +412,8 @@ export async function runPipeline(source, options, hooks = {}) {
       } else {
         // --- perception ---
         const t1 = now();
-        const dets = options.observations ? ((await options.observations(T)) ?? []) : await tracker.track({ width, height, data: rgba, channels: c });
+        const predictions = options.observations ? null : pipeline.predict(rgba);
+        const dets = options.observations ? ((await options.observations(T)) ?? []) : await tracker.track({ width, height, data: rgba, channels: c }, predictions);
         addTime('perception', now() - t1);
         // --- sides, fit, masks, SLAM ---
         const input = toDetections(dets);
@@ -401,6 +422,17 @@ export async function runPipeline(source, options, hooks = {}) {
         ['left', 'right'].forEach((side, s) => {
           if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s], keypoints2d: input[r.detection[s]].keypoints2d });
         });
+      }
+      if (options.live) {
+        const every = options.liveWorldEvery ?? Math.max(1, Math.round(fps));
+        if ((T + 1) % every === 0) {
+          // the frame in the world before the update too: a live display carries what it drew
+          // into the updated world (the same frame's camera in both worlds gives the change)
+          const before = pipeline.live();
+          info.world = pipeline.updateLiveWorld();
+          info.world.previous = { frame: before.frame, scale: before.scale, cameraRotation: before.cameraRotation, cameraPosition: before.cameraPosition };
+        }
+        info.live = pipeline.live();
       }
       T += 1;
       info.ms = now() - tf;
@@ -471,5 +503,39 @@ export async function runPipeline(source, options, hooks = {}) {
     };
   } finally {
     for (const o of owned.reverse()) { try { o.delete(); } catch { /* already freed */ } }
+  }
+}
+
+/**
+ * runPipeline in live mode as an async iterator: yields { type: 'frame', ...frameInfo } for each
+ * frame as it is processed (options.live set: causal estimates, see the header), then
+ * { type: 'result', result } with the refined result once the source ends. Frames are pulled
+ * from the source only as fast as they are processed (a live source drops what it cannot hand
+ * over). Breaking out of the loop aborts the run.
+ */
+export async function* streamPipeline(source, options, hooks = {}) {
+  const queue = [];
+  let wake = null;
+  let finished = false;
+  const controller = new AbortController();
+  if (hooks.signal) hooks.signal.addEventListener('abort', () => controller.abort(), { once: true });
+  const push = (item) => { queue.push(item); if (wake) { wake(); wake = null; } };
+  const run = runPipeline(source, { ...options, live: true }, {
+    ...hooks, signal: controller.signal,
+    onFrame: (info) => { if (hooks.onFrame) hooks.onFrame(info); push({ type: 'frame', ...info }); },
+  }).then((result) => push({ type: 'result', result }), (error) => push({ type: 'error', error }));
+  try {
+    while (!finished) {
+      if (queue.length === 0) await new Promise((r) => { wake = r; });
+      const item = queue.shift();
+      if (item.type === 'error') throw item.error;
+      if (item.type === 'result') finished = true;
+      yield item;
+    }
+  } finally {
+    if (!finished) {
+      controller.abort();
+      await run;
+    }
   }
 }
