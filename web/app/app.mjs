@@ -1,7 +1,10 @@
 // app.mjs — the page: inputs, the Web Worker that processes a clip, the views, the timeline and
 // the exports. The video is decoded here (the browser's <video>), frame by frame, and streamed to
-// the worker; no frame is kept. Nothing is uploaded: every file stays in this browser.
+// the worker; no frame is kept. Live mode streams a camera's frames the same way, each one only
+// when the worker asks for one (the others are dropped, and counted). Nothing is uploaded: every
+// file and frame stays in this browser.
 import { InputError, LIMITS, openVideo, estimateFps, processingSize, videoFrames } from './video_source.mjs';
+import { CameraFrames, closeCamera, listCameras, openCamera, playCamera } from './camera_source.mjs';
 import { SceneView } from './view3d.mjs';
 import { VideoOverlay } from './overlay.mjs';
 import { parseDepthConfig } from '../src/depth_model.mjs';
@@ -15,12 +18,20 @@ const ui = {
   video: $('video'), progress: $('progress'), stage: $('stage'), stages: $('stages'), message: $('message'),
   cancel: $('btn-cancel'), play: $('btn-play'), scrub: $('scrub'), frameLabel: $('frame-label'), summary: $('summary'),
   engine: $('engine'), modelsNote: $('models-note'), focalNote: $('focal-note'),
+  stop: $('btn-stop'), camera: $('btn-camera'), device: $('opt-device'), liveStatus: $('live-status'),
 };
+/** The bounds of a live recording: every processed frame stays in the worker until Stop (the
+ *  pipeline's per-frame arrays, the SLAM's grey frames and masks up to the worker's 64 MB, then
+ *  each hand's mesh per frame: 33 kB a frame for both default hands, 100 MB at 3000 frames) and
+ *  Stop refines all of it; the recording stops by itself at the first bound reached, saying
+ *  which (3000 frames: 5 minutes at 10 processed frames per second). */
+const LIVE_LIMITS = { maxSeconds: 300, maxFrames: 3000 };
 
 const app = {
   worker: null, ready: null, busy: false, run: null, result: null, meshes: null,
   mano: { left: null, right: null }, depth: { onnx: null, config: null, configName: null },
   sample: null, frame: 0, playing: false, base: 0, hasVideo: false, lastRun: null, readyMs: null, errors: [],
+  live: null, liveLimits: { ...LIVE_LIMITS },
 };
 window.haworApp = app;
 // The camera-height field's range is the pipeline's (eye_height.mjs), not a copy in the HTML.
@@ -97,11 +108,19 @@ function onWorker(m, resolveReady) {
       document.body.dataset.ready = '1';
       resolveReady(m.info);
       break;
-    case 'credit': if (run) { run.credits++; if (run.wake) { run.wake(); run.wake = null; } } break;
+    case 'credit': if (run) { run.credits++; if (run.wake) { run.wake(); run.wake = null; } if (run.onCredit) run.onCredit(); } break;
     case 'progress': setStage(m.stage, m.done, m.total); break;
     case 'frame-info': break;
+    case 'live-start': if (run && run.live) scene.startLive(m.intrinsics, run.meta.width, run.meta.height); break;
+    case 'live-frame': onLiveFrame(m.info); break;
     case 'result': onResult(m.result, m.meshes); break;
-    case 'cancelled': if (run && run.cancelled) { finishRun(); showMessage('Cancelled. Pick the next clip whenever you like.', 'info'); } break;
+    case 'cancelled':
+      if (run && run.cancelled) {
+        finishRun();
+        if (run.cancelMessage) showMessage(run.cancelMessage.text, run.cancelMessage.kind);
+        else showMessage('Cancelled. Pick the next clip whenever you like.', 'info');
+      }
+      break;
     case 'error':
       if (run) finishRun();
       showMessage(errorText(m.kind, m.message));
@@ -115,7 +134,8 @@ function onWorker(m, resolveReady) {
 function errorText(kind, message) {
   const prefix = { mano: 'Wrong MANO file', short: 'Clip too short', nohands: 'No hands found', video: 'Unsupported or corrupt video',
     resolution: 'Resolution too large', setup: 'Setup problem', result: 'Not a result file', depth: 'Depth model problem',
-    'eye-height': 'Wrong camera height', camera: 'Wrong camera model', readout: 'Wrong rolling-shutter readout' }[kind];
+    'eye-height': 'Wrong camera height', camera: 'Wrong camera model', readout: 'Wrong rolling-shutter readout',
+    'webcam-denied': 'Camera permission denied', 'webcam-none': 'No camera', 'webcam-busy': 'Camera busy', webcam: 'Camera problem' }[kind];
   return prefix ? `${prefix}: ${message}` : message;
 }
 
@@ -124,13 +144,15 @@ function errorText(kind, message) {
 function setBusy(b) {
   app.busy = b;
   ui.cancel.disabled = !b;
-  for (const el of document.querySelectorAll('#input input, #input select, #btn-sample')) el.disabled = b;
+  for (const el of document.querySelectorAll('#input input, #input select, #btn-sample, #btn-camera')) el.disabled = b;
+  if (!b) ui.stop.disabled = true;
   document.body.dataset.busy = b ? '1' : '0';
 }
 
 function finishRun() {
   if (app.run) {
     app.run.finished = true; if (app.run.wake) app.run.wake(); clearTimeout(app.run.killTimer);
+    if (app.run.live) endCapture(app.run.live);
     ui.stage.textContent = 'stopped'; ui.progress.value = 0;
   }
   app.run = null;
@@ -138,6 +160,44 @@ function finishRun() {
 }
 
 function number(id) { const v = Number($(id).value); return $(id).value !== '' && Number.isFinite(v) && v > 0 ? v : null; }
+
+/// The pipeline's options from the form, for frames of `size` (processingSize: the focal given in
+/// pixels of the original is scaled with it) at `fps`: the focal or field of view (else the
+/// sample's own focal, else the pipeline's default), the lens, the rolling-shutter readout, the
+/// camera height, the user's MANO and depth files. Throws an InputError for a wrong value.
+function formOptions(size, fps, sampleMeta = null) {
+  const options = { modelKind: $('opt-model').value };
+  const focal = number('opt-focal'), fov = number('opt-fov');
+  if (focal) options.focalPx = focal * size.scale;
+  else if (fov) options.fovDeg = fov;
+  else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
+  const camera = $('opt-camera').value.trim();
+  if (camera) options.camera = camera;  // checked by the core in the worker (Lens::parse, CameraModel::validate)
+  const readoutMs = number('opt-readout');
+  if (readoutMs) {
+    if (!(Math.abs(readoutMs) <= 1000 / fps)) throw new InputError('readout', `${readoutMs} ms is not within the frame interval (±${(1000 / fps).toFixed(1)} ms at ${fps} fps).`);
+    options.readout = readoutMs / 1000;
+  }
+  const eye = number('opt-eyeheight');
+  if (eye) {
+    const bad = eyeHeightError(eye);
+    if (bad) throw new InputError('eye-height', `${bad[0].toUpperCase()}${bad.slice(1)}.`);
+    options.eyeHeight = eye;
+  }
+  for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };
+  if (app.depth.onnx) {
+    if (!app.depth.config) throw new InputError('depth', 'A depth ONNX was given without its JSON config (drop both files).');
+    options.depth = { bytes: app.depth.onnx.bytes.slice(), config: app.depth.config };
+  }
+  return options;
+}
+
+/// The focal note's words on the options of a run.
+function optionsNote(options) {
+  return (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default')
+    + (options.camera ? `, camera model ${options.camera}` : '')
+    + (options.readout ? `, rolling shutter ${1000 * options.readout} ms` : '');
+}
 
 async function processVideo(url, name, sampleMeta = null) {
   if (app.busy) return;
@@ -161,34 +221,9 @@ async function processVideo(url, name, sampleMeta = null) {
     const size = processingSize(meta.width, meta.height, number('opt-maxside') || 960);
     app.base = est.base;
     app.hasVideo = true;
-    const options = { modelKind: $('opt-model').value };
-    const focal = number('opt-focal'), fov = number('opt-fov');
-    if (focal) options.focalPx = focal * size.scale;
-    else if (fov) options.fovDeg = fov;
-    else if (sampleMeta && sampleMeta.fx) options.focalPx = sampleMeta.fx * (size.width / sampleMeta.width);
-    const camera = $('opt-camera').value.trim();
-    if (camera) options.camera = camera;  // checked by the core in the worker (Lens::parse, CameraModel::validate)
-    const readoutMs = number('opt-readout');
-    if (readoutMs) {
-      if (!(Math.abs(readoutMs) <= 1000 / fps)) throw new InputError('readout', `${readoutMs} ms is not within the frame interval (±${(1000 / fps).toFixed(1)} ms at ${fps} fps).`);
-      options.readout = readoutMs / 1000;
-    }
-    const eye = number('opt-eyeheight');
-    if (eye) {
-      const bad = eyeHeightError(eye);
-      if (bad) throw new InputError('eye-height', `${bad[0].toUpperCase()}${bad.slice(1)}.`);
-      options.eyeHeight = eye;
-    }
-    for (const side of ['left', 'right']) if (app.mano[side]) (options.mano ||= {})[side] = { name: app.mano[side].name, bytes: app.mano[side].bytes.slice() };
-    if (app.depth.onnx) {
-      if (!app.depth.config) throw new InputError('depth', 'A depth ONNX was given without its JSON config (drop both files).');
-      options.depth = { bytes: app.depth.onnx.bytes.slice(), config: app.depth.config };
-    }
+    const options = formOptions(size, fps, sampleMeta);
     run.meta = { width: size.width, height: size.height, fps, frameCount, original: meta };
-    ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}`
-      + (options.focalPx ? `, focal ${options.focalPx.toFixed(1)} px at that size` : options.fovDeg ? `, field of view ${options.fovDeg}°` : ', focal: the pipeline\'s default')
-      + (options.camera ? `, camera model ${options.camera}` : '')
-      + (options.readout ? `, rolling shutter ${1000 * options.readout} ms` : '');
+    ui.focalNote.textContent = `${meta.width}×${meta.height} at ${fps} fps, ${frameCount} frames; processed at ${size.width}×${size.height}${optionsNote(options)}`;
     app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount }, options });
     run.started = true;
     const wait = () => new Promise((resolve) => {
@@ -223,12 +258,179 @@ async function processVideo(url, name, sampleMeta = null) {
   }
 }
 
+// --- live: the camera ----------------------------------------------------------------------------
+// The camera's frames go to the worker one at a time, each when the pipeline asks for one (the
+// worker's 'credit'; camera_source.mjs drops the others, counted). The worker runs the pipeline in
+// live mode (run.mjs, options.live) and answers each frame with its causal estimates, drawn here;
+// Stop ends the stream and the pipeline's refined result replaces them.
+
+function newLive() {
+  return {
+    stream: null, frames: null, size: null, camera: null, timer: null, stopping: false, stopReason: null,
+    processed: 0, capture: new Map(), latencies: [], tFirst: null, tLast: null, recent: [],
+    scaleMethod: 'none', scale: null, scaleConfidence: null, up: 'none', cameraPoses: 0, handsSeen: 0, seen: { left: 0, right: 0 },
+  };
+}
+
+async function startLive() {
+  if (app.busy) return;
+  clearMessage();
+  resetViews();
+  setBusy(true);
+  ui.stages.textContent = '';
+  const live = newLive();
+  const run = { name: 'camera', live, credits: 0, wake: null, finished: false, stages: new Map(), tStart: performance.now() };
+  app.run = run;
+  app.live = live;
+  try {
+    await app.ready;
+    setStage('opening the camera');
+    const { stream, track } = await openCamera(ui.device.value);
+    live.stream = stream;
+    if (run.finished) { endCapture(live); return; }  // cancelled while the browser asked
+    listCameras(ui.device);
+    track.addEventListener('ended', () => stopLive('the camera stopped sending frames (unplugged, or taken by another application)'));
+    app.hasVideo = false;
+    const cam = await playCamera(ui.video, stream, track);
+    if (live.stopping || run.finished) throw new InputError('webcam', live.stopReason || 'stopped before the first frame.');
+    if (!(cam.width > 0 && cam.height > 0)) throw new InputError('webcam', 'the camera gave no picture size.');
+    const fps = cam.fps || 30;
+    const size = processingSize(cam.width, cam.height, number('opt-maxside') || 960);
+    const options = formOptions(size, fps);
+    live.size = size;
+    live.camera = { ...cam, fps };
+    run.meta = { width: size.width, height: size.height, fps, frameCount: null, original: { width: cam.width, height: cam.height }, live: true };
+    ui.focalNote.textContent = `camera${cam.label ? ` "${cam.label}"` : ''} ${cam.width}×${cam.height} at ${fps} fps; processed at ${size.width}×${size.height}${optionsNote(options)}`;
+    app.worker.postMessage({ type: 'start', meta: { width: size.width, height: size.height, fps, frameCount: null, live: true }, options });
+    run.started = true;
+    ui.stop.disabled = false;
+    ui.liveStatus.hidden = false;
+    ui.liveStatus.textContent = 'live: loading the networks…';
+    ui.stage.textContent = 'loading the networks…';
+    live.frames = new CameraFrames(ui.video, size.width, size.height, (f) => handOver(run, f));
+    run.onCredit = () => live.frames.ask();
+  } catch (e) {
+    const kind = e instanceof InputError ? e.kind : 'webcam';
+    if (app.run === run) {
+      if (run.started) app.worker.postMessage({ type: 'cancel' });
+      finishRun();
+      showMessage(errorText(kind, e.message));
+    } else {
+      endCapture(live);
+    }
+  }
+}
+
+/// A camera frame to the worker (the pipeline asked for it); the bounds of the recording.
+function handOver(run, f) {
+  const live = run.live, lim = app.liveLimits;
+  if (f.index === 0) {
+    const min = lim.maxSeconds / 60;
+    live.timer = setTimeout(() => stopLive(`the recording reached its bound of ${Number.isInteger(min) ? `${min} minute${min === 1 ? '' : 's'}` : `${lim.maxSeconds} s`}`), 1000 * lim.maxSeconds);
+  }
+  live.capture.set(f.index, f.time);
+  run.credits--;
+  app.worker.postMessage({ type: 'frame', index: f.index, rgba: f.rgba.buffer }, [f.rgba.buffer]);
+  if (f.index + 1 >= lim.maxFrames) stopLive(`the recording reached its bound of ${lim.maxFrames} processed frames`);
+}
+
+/// Stops the camera (the frames already handed over are still processed).
+function endCapture(live) {
+  clearTimeout(live.timer);
+  if (live.frames) live.frames.stop();
+  closeCamera(ui.video, live.stream);
+  live.stream = null;
+}
+
+/// Ends the recording (Stop, a bound, the camera gone): the worker refines what was processed.
+function stopLive(reason = null) {
+  const run = app.run, live = run && run.live;
+  if (!live || live.stopping || run.finished) return;
+  live.stopping = true;
+  live.stopReason = reason;
+  endCapture(live);
+  ui.stop.disabled = true;
+  if (!run.started) return;
+  const sent = live.frames ? live.frames.sent : 0;
+  if (sent < LIMITS.minFrames) {
+    run.cancelled = true;
+    run.cancelMessage = { kind: 'error', text: errorText('short', `${reason ? `${reason[0].toUpperCase()}${reason.slice(1)}; only` : 'Only'} ${sent} camera frame(s) were processed; at least ${LIMITS.minFrames} are needed.`) };
+    app.worker.postMessage({ type: 'cancel' });
+    return;
+  }
+  app.worker.postMessage({ type: 'end' });
+  if (reason) showMessage(`Stopped: ${reason}. The refined result of the ${sent} processed frames follows.`, 'info');
+  ui.liveStatus.textContent = liveStatusText(live);
+}
+
+/// One processed frame's live estimates (worker.mjs's liveInfo): drawn, and counted.
+function onLiveFrame(info) {
+  const run = app.run, live = run && run.live;
+  if (!live || !live.size) return;
+  live.processed++;
+  overlay.drawLive({ width: live.size.width, height: live.size.height, hands: info.hands });
+  const w = info.world, l = info.live;
+  if (w) {
+    const prev = w.previous && l && w.previous.frame === l.frame ? w.previous : null;
+    scene.liveWorld(w.up === 'none' ? 'first-camera' : 'z-up', w.origin, prev, l);
+    Object.assign(live, { scaleMethod: w.scaleMethod, scale: w.scale, scaleConfidence: w.scaleConfidence, up: w.up });
+  }
+  scene.liveFrame(l);
+  const t = performance.now();
+  const tc = live.capture.get(info.index);
+  live.capture.delete(info.index);
+  if (tc !== undefined) live.latencies.push(t - tc);
+  if (live.tFirst === null) live.tFirst = t;
+  live.tLast = t;
+  live.recent.push(t);
+  while (live.recent.length && live.recent[0] < t - 2000) live.recent.shift();
+  if (l && l.posed) live.cameraPoses++;
+  if (info.hands.length) live.handsSeen++;
+  for (const h of info.hands) live.seen[h.side]++;
+  ui.liveStatus.textContent = liveStatusText(live);
+}
+
+function percentile(values, q) {
+  if (!values.length) return null;
+  const s = Float64Array.from(values).sort();
+  return s[Math.max(0, Math.ceil(q * s.length) - 1)];
+}
+
+/// The live statistics (window.haworApp.liveStats()); null before the first live run.
+function liveStats(l = app.live) {
+  if (!l) return null;
+  const fr = l.frames;
+  const span = l.recent.length > 1 ? (l.recent[l.recent.length - 1] - l.recent[0]) / 1000 : 0;
+  return {
+    running: !!(app.run && app.run.live === l && !l.stopping), stopReason: l.stopReason,
+    framesCaptured: fr ? fr.captured : 0, framesSent: fr ? fr.sent : 0, framesProcessed: l.processed, dropped: fr ? fr.dropped : 0,
+    fps: l.processed > 1 ? (l.processed - 1) / ((l.tLast - l.tFirst) / 1000) : null,
+    fpsRecent: span > 0 ? (l.recent.length - 1) / span : null,
+    latencyMsP50: percentile(l.latencies, 0.5), latencyMsP95: percentile(l.latencies, 0.95), latencyClock: fr ? fr.clock : null,
+    scaleMethod: l.scaleMethod, scale: l.scale, scaleConfidence: l.scaleConfidence, up: l.up,
+    cameraPoses: l.cameraPoses, handsSeen: l.handsSeen, handsSeenBySide: { ...l.seen },
+    size: l.size && { width: l.size.width, height: l.size.height }, camera: l.camera,
+  };
+}
+
+function liveStatusText(l) {
+  const s = liveStats(l);
+  const ms = (x) => (x === null ? '–' : `${Math.round(x)} ms`);
+  const fps = s.fpsRecent ?? s.fps;
+  const scale = s.scaleMethod && s.scaleMethod !== 'none'
+    ? `scale ${Number(s.scale).toFixed(3)} (${s.scaleMethod}, confidence ${Number(s.scaleConfidence).toFixed(2)})` : 'scale pending';
+  return `${s.running ? 'live' : 'stopped'} · ${s.framesProcessed} frames processed · ${fps !== null ? fps.toFixed(1) : '–'} fps`
+    + ` · ${s.dropped} dropped · latency ${ms(s.latencyMsP50)} (p95 ${ms(s.latencyMsP95)}) · ${scale}`
+    + ` · camera posed on ${s.cameraPoses} · hands on ${s.handsSeen}${l.stopping && !app.result ? ' · refining…' : ''}`;
+}
+
 function cancelRun() {
   const run = app.run;
   if (!run) return;
   run.finished = true;
   run.cancelled = true;
   if (run.wake) run.wake();
+  if (run.live) endCapture(run.live);
   setStage('cancelling');
   if (!run.started) { finishRun(); showMessage('Cancelled.', 'info'); return; }
   app.worker.postMessage({ type: 'cancel' });
@@ -246,11 +448,13 @@ function onResult(result, meshes) {
   const run = app.run;
   app.result = result;
   app.meshes = meshes;
+  if (run && run.live) run.decoded = run.live.frames ? run.live.frames.sent : 0;
   if (run) {
     app.lastRun = { name: run.name, totalMs: performance.now() - run.tStart, decodeMs: run.decodeMs, decoded: run.decoded, meta: run.meta,
       stages: Object.fromEntries([...run.stages].map(([k, s]) => [k, { ms: s.last - s.first, done: s.done, total: s.total }])),
-      timings: result.timings || {} };
+      timings: result.timings || {}, ...(run.live ? { live: liveStats(run.live) } : {}) };
     finishRun();
+    if (run.live) ui.liveStatus.textContent = `${liveStatusText(run.live)} · the refined result below replaced the live estimates`;
   }
   ui.progress.value = 1;
   ui.stage.textContent = 'done';
@@ -297,6 +501,8 @@ function resetViews() {
   for (const b of document.querySelectorAll('[data-export]')) b.disabled = true;
   ui.summary.textContent = '';
   ui.progress.value = 0;
+  ui.liveStatus.hidden = true;
+  ui.liveStatus.textContent = '';
 }
 
 function show() { return { kp: $('show-kp').checked, mesh: $('show-mesh').checked, mask: $('show-mask').checked }; }
@@ -452,6 +658,10 @@ $('btn-sample').onclick = async () => {
   } catch (e) { showMessage(errorText(e.kind || 'setup', e.message)); }
 };
 ui.cancel.onclick = cancelRun;
+ui.camera.onclick = startLive;
+ui.stop.onclick = () => stopLive();
+listCameras(ui.device);
+if (navigator.mediaDevices && navigator.mediaDevices.addEventListener) navigator.mediaDevices.addEventListener('devicechange', () => listCameras(ui.device));
 const drop = $('drop');
 for (const ev of ['dragenter', 'dragover']) drop.addEventListener(ev, (e) => { e.preventDefault(); drop.classList.add('over'); });
 for (const ev of ['dragleave', 'drop']) drop.addEventListener(ev, (e) => { e.preventDefault(); drop.classList.remove('over'); });
@@ -461,6 +671,13 @@ window.addEventListener('drop', (e) => e.preventDefault());
 
 app.view = { scene, overlay, setFrame, play, pause };
 app.sceneSummary = () => scene.summary();
+/// Live mode's statistics: { running, framesCaptured (camera frames since the first one handed
+/// over), framesSent, framesProcessed, dropped, fps, fpsRecent (last 2 s), latencyMsP50,
+/// latencyMsP95 (capture to the overlay drawn), latencyClock, scaleMethod, scale, scaleConfidence,
+/// up, cameraPoses (frames the SLAM posed), handsSeen (frames with a hand), handsSeenBySide, size,
+/// camera, stopReason }; null before the first live run.
+app.liveStats = () => liveStats();
+app.stopLive = () => stopLive();
 /// Memory of the worker's WebAssembly core and JavaScript heap, and of the page's heap.
 app.stats = () => new Promise((resolve) => {
   app.statsWaiter = (w) => resolve({ ...w, pageJsHeapBytes: performance.memory ? performance.memory.usedJSHeapSize : null });

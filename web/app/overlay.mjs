@@ -1,13 +1,31 @@
 // overlay.mjs — the video view's overlays: the 2D keypoints (canvas 2D), and the hand meshes
 // seen through the estimated camera (three.js, a camera whose projection is the video's
-// intrinsics): filled silhouettes (the hand mask) and wireframes (the projected mesh).
+// intrinsics): filled silhouettes (the hand mask) and wireframes (the projected mesh). In live
+// mode (the camera) the keypoints of the last processed frame only.
 import * as THREE from 'three';
-import { SIDE_COLORS, cameraPoses, flat } from './view3d.mjs';
+import { SIDE_COLORS, BONES, cameraPoses, flat } from './view3d.mjs';
 
-// MediaPipe's 21-keypoint hand skeleton (display only).
-const BONES = [[0, 1], [1, 2], [2, 3], [3, 4], [0, 5], [5, 6], [6, 7], [7, 8], [5, 9], [9, 10], [10, 11], [11, 12],
-  [9, 13], [13, 14], [14, 15], [15, 16], [13, 17], [0, 17], [17, 18], [18, 19], [19, 20]];
 const CSS = { left: '#2f7df6', right: '#f2762e' };
+
+/// One hand's 21 keypoints (K[o + 2i], K[o + 2i + 1]: image pixels of frames of size w x h) as a
+/// skeleton inside the rectangle r.
+function drawHand(ctx, K, o, side, r, w, h) {
+  const sx = r.w / w, sy = r.h / h;
+  const u = (i) => r.x + (K[o + 2 * i] + 0.5) * sx, v = (i) => r.y + (K[o + 2 * i + 1] + 0.5) * sy;
+  if (!Number.isFinite(K[o] + K[o + 1])) return;
+  ctx.strokeStyle = CSS[side]; ctx.fillStyle = CSS[side]; ctx.lineWidth = 2;
+  ctx.beginPath();
+  for (const [a, b] of BONES) {
+    if (!Number.isFinite(K[o + 2 * a] + K[o + 2 * b] + K[o + 2 * a + 1] + K[o + 2 * b + 1])) continue;
+    ctx.moveTo(u(a), v(a)); ctx.lineTo(u(b), v(b));
+  }
+  ctx.stroke();
+  ctx.strokeStyle = '#fff'; ctx.lineWidth = 1;
+  for (let i = 0; i < 21; i++) {
+    if (!Number.isFinite(K[o + 2 * i] + K[o + 2 * i + 1])) continue;
+    ctx.beginPath(); ctx.arc(u(i), v(i), 3, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
+  }
+}
 
 /// OpenGL projection of a pinhole camera (OpenCV intrinsics, pixel centres at integers) for a
 /// three.js camera looking down −z with y up.
@@ -33,12 +51,21 @@ export class VideoOverlay {
     this.camera.matrixAutoUpdate = false;
     this.flip = new THREE.Quaternion(1, 0, 0, 0);  // OpenCV camera axes -> three's (180° about x)
     this.state = null;
+    this.live = null;
     new ResizeObserver(() => this.draw()).observe(canvas2d.parentElement);
   }
 
   clear() {
     if (this.state) for (const h of Object.values(this.state.hands)) { h.fill.material.dispose(); h.wire.material.dispose(); this.scene.remove(h.fill, h.wire); }
     this.state = null;
+    this.live = null;
+    this.draw();
+  }
+
+  /// Live mode: the keypoints of one processed frame, { width, height, hands: [{ side,
+  /// keypoints2d (42) }] } (the hands seen on it), over the camera's picture.
+  drawLive(frame) {
+    this.live = frame;
     this.draw();
   }
 
@@ -64,7 +91,7 @@ export class VideoOverlay {
   rect() {
     const el = this.c2d.parentElement;
     const W = el.clientWidth, H = el.clientHeight;
-    const s = this.state && this.state.result;
+    const s = (this.state && this.state.result) || this.live;
     const vw = s ? s.width : (this.video.videoWidth || 16), vh = s ? s.height : (this.video.videoHeight || 9);
     const k = Math.min(W / vw, H / vh);
     return { x: (W - vw * k) / 2, y: (H - vh * k) / 2, w: vw * k, h: vh * k, W, H };
@@ -83,7 +110,10 @@ export class VideoOverlay {
     this.gl.setSize(r.W, r.H, false);
     this.gl.clear();
     const s = this.state;
-    if (!s) return;
+    if (!s) {
+      if (this.live && show.kp) for (const h of this.live.hands) if (h.keypoints2d) drawHand(ctx, h.keypoints2d, 0, h.side, r, this.live.width, this.live.height);
+      return;
+    }
     const res = s.result;
     // Meshes through the estimated camera.
     const p = s.cam.positions.subarray(3 * t, 3 * t + 3), q = s.cam.quaternions.subarray(4 * t, 4 * t + 4);
@@ -107,24 +137,6 @@ export class VideoOverlay {
     }
     // 2D keypoints (image pixels of the processed frames).
     if (!show.kp) return;
-    const sx = r.w / res.width, sy = r.h / res.height;
-    for (const side of Object.keys(s.kp)) {
-      const K = s.kp[side];
-      if (!K) continue;
-      const u = (i) => r.x + (K[42 * t + 2 * i] + 0.5) * sx, v = (i) => r.y + (K[42 * t + 2 * i + 1] + 0.5) * sy;
-      if (!Number.isFinite(K[42 * t] + K[42 * t + 1])) continue;
-      ctx.strokeStyle = CSS[side]; ctx.fillStyle = CSS[side]; ctx.lineWidth = 2;
-      ctx.beginPath();
-      for (const [a, b] of BONES) {
-        if (!Number.isFinite(K[42 * t + 2 * a] + K[42 * t + 2 * b] + K[42 * t + 2 * a + 1] + K[42 * t + 2 * b + 1])) continue;
-        ctx.moveTo(u(a), v(a)); ctx.lineTo(u(b), v(b));
-      }
-      ctx.stroke();
-      ctx.strokeStyle = '#fff'; ctx.lineWidth = 1;
-      for (let i = 0; i < 21; i++) {
-        if (!Number.isFinite(K[42 * t + 2 * i] + K[42 * t + 2 * i + 1])) continue;
-        ctx.beginPath(); ctx.arc(u(i), v(i), 3, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
-      }
-    }
+    for (const side of Object.keys(s.kp)) if (s.kp[side]) drawHand(ctx, s.kp[side], 42 * t, side, r, res.width, res.height);
   }
 }

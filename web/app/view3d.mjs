@@ -1,10 +1,15 @@
 // view3d.mjs — the 3D view (three.js): world-space hand meshes of the current frame, the wrist
-// tracks of both hands, the camera path, the current camera frustum and the SLAM points.
-// Display only: every position comes from the result or the core's hand meshes.
+// tracks of both hands, the camera path, the current camera frustum and the SLAM points; in live
+// mode (the camera) the path so far, the current frustum and the current hands' keypoints.
+// Display only: every position comes from the result, the core's hand meshes or the pipeline's
+// live estimates.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 export const SIDE_COLORS = { left: 0x2f7df6, right: 0xf2762e };
+/// MediaPipe's 21-keypoint hand skeleton (display only).
+export const BONES = [[0, 1], [1, 2], [2, 3], [3, 4], [0, 5], [5, 6], [6, 7], [7, 8], [5, 9], [9, 10], [10, 11], [11, 12],
+  [9, 13], [13, 14], [14, 15], [15, 16], [13, 17], [0, 17], [17, 18], [18, 19], [19, 20]];
 const PALE = { left: 0x9cc0fb, right: 0xf9bd98 };
 
 /// Flat Float32Array of a (T,n) array given flat or nested (nulls become NaN).
@@ -52,6 +57,8 @@ export class SceneView {
     this.camera.position.set(0.8, 0.6, 1.2);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.addEventListener('change', () => this.render());
+    // live mode follows the scene until the user turns the view
+    this.controls.addEventListener('start', () => { if (this.objects && this.objects.live) this.objects.userMoved = true; });
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x333344, 2.2));
     const sun = new THREE.DirectionalLight(0xffffff, 1.2);
     sun.position.set(1, 2, 1.5);
@@ -92,6 +99,7 @@ export class SceneView {
     const o = { T, hands: {}, meshes };
     const zUp = result.world && result.world.convention === 'z-up';
     this.world.rotation.x = zUp ? -Math.PI / 2 : Math.PI;
+    this.grid.scale.setScalar(1);
     const box = new THREE.Box3();
     // Hands: one mesh per side, its vertices replaced every frame.
     for (const side of ['left', 'right']) {
@@ -185,7 +193,7 @@ export class SceneView {
 
   setFrame(t) {
     const o = this.objects;
-    if (!o) return;
+    if (!o || o.live) return;
     this.frame = t;
     for (const side of ['left', 'right']) {
       const h = o.hands[side], m = o.meshes[side];
@@ -210,12 +218,159 @@ export class SceneView {
     this.render();
   }
 
+  // --- live mode ---------------------------------------------------------------------------------
+
+  /// Live mode: an empty world that grows with each processed frame (run.mjs's frameInfo.live):
+  /// the camera path so far (the posed frames), the current frustum and the current hands' 21
+  /// fitted keypoints as skeletons. K, width, height: the intrinsics and size of the frames.
+  startLive(K, width, height) {
+    this.clear();
+    this.world.rotation.x = Math.PI;  // the first camera's frame (y down) until the world is gravity-aligned
+    const o = { live: true, T: 0, hands: {}, pathPoints: 0, userMoved: false, convention: 'first-camera', origin: 'first-camera', worldChanges: 0 };
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * 1024), 3));
+    g.setDrawRange(0, 0);
+    o.path = new THREE.Line(g, new THREE.LineBasicMaterial({ color: 0xdddddd }));
+    o.path.name = 'camera_path';
+    o.path.frustumCulled = false;
+    this.world.add(o.path);
+    const fg = new THREE.BufferGeometry();
+    fg.setAttribute('position', new THREE.BufferAttribute(frustumSegments(K, width, height, 1), 3));
+    o.frustum = new THREE.LineSegments(fg, new THREE.LineBasicMaterial({ color: 0xffe066 }));
+    o.frustum.name = 'camera_frustum';
+    o.frustum.visible = false;
+    this.world.add(o.frustum);
+    for (const side of ['left', 'right']) {
+      const geom = new THREE.BufferGeometry();
+      geom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(63), 3));
+      geom.setIndex(BONES.flat());
+      const bones = new THREE.LineSegments(geom, new THREE.LineBasicMaterial({ color: SIDE_COLORS[side] }));
+      const dots = new THREE.Points(geom, new THREE.PointsMaterial({ color: SIDE_COLORS[side], size: 4, sizeAttenuation: false }));
+      bones.frustumCulled = false; dots.frustumCulled = false;
+      const group = new THREE.Group();
+      group.name = `${side}_hand`;
+      group.add(bones, dots);
+      group.visible = false;
+      this.world.add(group);
+      o.hands[side] = { group, geom, frames: 0 };
+    }
+    this.objects = o;
+    this.render();
+  }
+
+  /// The live world changed (a frame that brought frameInfo.world): its convention ('z-up' once
+  /// gravity-aligned, else 'first-camera') and origin; `before` and `after` are the same frame's
+  /// camera in the previous and in the new world ({ scale, cameraRotation (9, row-major),
+  /// cameraPosition }), which carry the path drawn so far into the new world: X' = c' + k R' Rᵀ
+  /// (X − c), k = scale' / scale. Without them the path starts again.
+  liveWorld(convention, origin, before, after) {
+    const o = this.objects;
+    if (!o || !o.live) return;
+    const attr = o.path.geometry.getAttribute('position');
+    const a = attr.array;
+    if (before && after) {
+      const R0 = before.cameraRotation, R1 = after.cameraRotation, c0 = before.cameraPosition, c1 = after.cameraPosition;
+      const k = after.scale / before.scale;
+      const D = new Float64Array(9);  // R1 R0ᵀ
+      for (let i = 0; i < 3; i++) for (let j = 0; j < 3; j++) D[3 * i + j] = R1[3 * i] * R0[3 * j] + R1[3 * i + 1] * R0[3 * j + 1] + R1[3 * i + 2] * R0[3 * j + 2];
+      for (let n = 0; n < o.pathPoints; n++) {
+        const x = a[3 * n] - c0[0], y = a[3 * n + 1] - c0[1], z = a[3 * n + 2] - c0[2];
+        for (let i = 0; i < 3; i++) a[3 * n + i] = c1[i] + k * (D[3 * i] * x + D[3 * i + 1] * y + D[3 * i + 2] * z);
+      }
+    } else {
+      o.pathPoints = 0;
+      o.path.geometry.setDrawRange(0, 0);
+    }
+    attr.needsUpdate = true;
+    o.path.geometry.computeBoundingSphere();
+    o.convention = convention;
+    o.origin = origin;
+    o.worldChanges++;
+    this.world.rotation.x = convention === 'z-up' ? -Math.PI / 2 : Math.PI;
+    if (!o.userMoved) this.fitLive();
+    this.render();
+  }
+
+  /// One processed frame of live mode: frameInfo.live ({ posed, cameraRotation, cameraPosition,
+  /// joints: { left, right } }); hands without joints on this frame are hidden.
+  liveFrame(l) {
+    const o = this.objects;
+    if (!o || !o.live || !l) return;
+    o.T++;
+    const p = l.cameraPosition, R = l.cameraRotation;
+    const ok = !!(p && R) && Number.isFinite(p[0] + p[1] + p[2]) && R.every(Number.isFinite);
+    if (ok && l.posed) {
+      let attr = o.path.geometry.getAttribute('position');
+      if (3 * (o.pathPoints + 1) > attr.array.length) {
+        const grown = new Float32Array(2 * attr.array.length);
+        grown.set(attr.array);
+        attr = new THREE.BufferAttribute(grown, 3);
+        o.path.geometry.setAttribute('position', attr);
+      }
+      attr.array.set([p[0], p[1], p[2]], 3 * o.pathPoints);
+      o.pathPoints++;
+      attr.needsUpdate = true;
+      o.path.geometry.setDrawRange(0, o.pathPoints);
+    }
+    o.frustum.visible = ok;
+    if (ok) {
+      const m = new THREE.Matrix4().set(R[0], R[1], R[2], 0, R[3], R[4], R[5], 0, R[6], R[7], R[8], 0, 0, 0, 0, 1);
+      o.frustum.position.set(p[0], p[1], p[2]);
+      o.frustum.quaternion.setFromRotationMatrix(m);
+    }
+    for (const side of ['left', 'right']) {
+      const h = o.hands[side], J = l.joints && l.joints[side];
+      h.group.visible = !!J;
+      if (!J) continue;
+      const attr = h.geom.getAttribute('position');
+      attr.array.set(J);
+      attr.needsUpdate = true;
+      h.frames++;
+    }
+    if (!o.userMoved && (o.T <= 5 || o.T % 15 === 0)) this.fitLive();
+    this.render();
+  }
+
+  /// Frames the live scene: the path and the visible hands in view, the frustum sized to them.
+  fitLive() {
+    const o = this.objects;
+    const box = new THREE.Box3();
+    const a = o.path.geometry.getAttribute('position').array;
+    const v = new THREE.Vector3();
+    for (let n = 0; n < o.pathPoints; n++) box.expandByPoint(v.set(a[3 * n], a[3 * n + 1], a[3 * n + 2]));
+    for (const side of ['left', 'right']) {
+      const h = o.hands[side];
+      if (!h.group.visible) continue;
+      const J = h.geom.getAttribute('position').array;
+      for (let k = 0; k < 21; k++) if (Number.isFinite(J[3 * k] + J[3 * k + 1] + J[3 * k + 2])) box.expandByPoint(v.set(J[3 * k], J[3 * k + 1], J[3 * k + 2]));
+    }
+    if (box.isEmpty()) return;
+    const extent = box.getSize(new THREE.Vector3()).length();
+    // metres once the live world is metric; before that the SLAM's units (any size)
+    const size = o.convention === 'z-up' ? Math.max(0.3, extent) : (extent > 0 ? extent : 1);
+    o.frustum.scale.setScalar(0.08 * size);
+    this.world.updateMatrixWorld(true);
+    const cen = box.getCenter(new THREE.Vector3()).applyMatrix4(this.world.matrixWorld);
+    this.grid.position.set(cen.x, o.convention === 'z-up' && o.origin === 'floor' ? 0 : cen.y - size * 0.6, cen.z);
+    this.grid.scale.setScalar(o.convention === 'z-up' ? 1 : size);
+    this.controls.target.copy(cen);
+    this.camera.position.copy(cen).add(new THREE.Vector3(0.9, 0.7, 1.3).multiplyScalar(size));
+    this.camera.near = size / 200; this.camera.far = size * 200; this.camera.updateProjectionMatrix();
+    this.controls.update();
+  }
+
   render() { this.renderer.render(this.scene, this.camera); }
 
   /// What the scene holds (for the page's summary and the tests): read from the scene objects.
   summary() {
     const o = this.objects;
     if (!o) return null;
+    if (o.live) {
+      const hands = {};
+      for (const side of ['left', 'right']) hands[side] = { frames: o.hands[side].frames, visibleNow: o.hands[side].group.visible };
+      return { live: true, frame: o.T - 1, hands, cameraPath: o.pathPoints, points: 0, frustum: o.frustum.visible,
+        convention: o.convention, objects: this.world.children.map((c) => c.name) };
+    }
     const s = { frame: this.frame, hands: {}, cameraPath: 0, points: 0, frustum: false };
     for (const side of ['left', 'right']) {
       const h = o.hands[side];

@@ -12,6 +12,11 @@
 // worker -> page: {type:'ready', info} | {type:'credit'} | {type:'progress', stage, done, total}
 //   | {type:'frame-info', info} | {type:'result', result, meshes} | {type:'error', kind, message}
 //   | {type:'cancelled'} | {type:'exported', format, data, mime, filename}
+//   live (meta.live: the camera): {type:'live-start', intrinsics} | {type:'live-frame', info}
+//
+// Frames: for a file the page keeps a few in flight ('credit': one was taken); live, a 'credit'
+// says that the pipeline waits for a frame with none queued, and the page hands over exactly one
+// (a camera frame that comes while none is asked for is dropped by the page, never queued).
 import { loadCore } from '../src/core.mjs';
 import { handMeshSequence } from '../src/export/hand_meshes.mjs';
 import { buildGlb } from '../src/export/gltf.mjs';
@@ -109,9 +114,9 @@ function postResult(result) {
 
 // --- frames from the page ------------------------------------------------------------------------
 
-function frameQueue(signal) {
-  const q = { items: [], ended: false, wake: null };
-  q.push = (f) => { q.items.push(f); if (q.wake) { q.wake(); q.wake = null; } };
+function frameQueue(signal, live = false) {
+  const q = { items: [], ended: false, wake: null, asked: false };
+  q.push = (f) => { q.items.push(f); q.asked = false; if (q.wake) { q.wake(); q.wake = null; } };
   q.end = () => { q.ended = true; if (q.wake) { q.wake(); q.wake = null; } };
   q.iterable = {
     [Symbol.asyncIterator]() {
@@ -119,8 +124,9 @@ function frameQueue(signal) {
         async next() {
           for (;;) {
             if (signal.aborted) throw new DOMException('cancelled', 'AbortError');
-            if (q.items.length) { post({ type: 'credit' }); return { value: q.items.shift(), done: false }; }
+            if (q.items.length) { if (!live) post({ type: 'credit' }); return { value: q.items.shift(), done: false }; }
             if (q.ended) return { value: undefined, done: true };
+            if (live && !q.asked) { q.asked = true; post({ type: 'credit' }); }
             await new Promise((r) => { q.wake = r; signal.addEventListener('abort', r, { once: true }); });
           }
         },
@@ -134,12 +140,13 @@ function frameQueue(signal) {
 async function start(meta, options) {
   if (state.run) return fail('busy', 'A clip is already being processed.');
   const controller = new AbortController();
-  const frames = frameQueue(controller.signal);
+  const live = !!meta.live;
+  const frames = frameQueue(controller.signal, live);
   state.run = { controller, frames };
   try {
-    let run;
+    let run, cameraIntrinsics;
     try {
-      ({ runPipeline: run } = await import('../src/pipeline/run.mjs'));
+      ({ runPipeline: run, cameraIntrinsics } = await import('../src/pipeline/run.mjs'));
     } catch (e) {
       throw Object.assign(new Error(`The processing pipeline (web/src/pipeline/run.mjs) could not be loaded: ${e.message}`), { kind: 'setup' });
     }
@@ -167,10 +174,16 @@ async function start(meta, options) {
     if (options.camera) opts.camera = options.camera;
     if (options.readout) opts.readout = options.readout;
     if (options.depth) opts.depthModel = { bytes: new Uint8Array(options.depth.bytes), config: options.depth.config };
+    if (live) {
+      // the camera: causal estimates per frame
+      opts.live = true;
+      // the page draws the live frustum with the intrinsics the pipeline uses (throws as it would)
+      post({ type: 'live-start', intrinsics: cameraIntrinsics(state.core, meta.width, meta.height, opts) });
+    }
     const hooks = {
       signal: controller.signal,
       onProgress: (p) => post({ type: 'progress', stage: p.stage, done: p.done, total: p.total }),
-      onFrame: (info) => post({ type: 'frame-info', info: plain(info) }),
+      onFrame: live ? (info) => post({ type: 'live-frame', info: liveInfo(info) }) : (info) => post({ type: 'frame-info', info: plain(info) }),
     };
     const result = await run(source, opts, hooks);
     if (controller.signal.aborted) throw new DOMException('cancelled', 'AbortError');
@@ -192,6 +205,16 @@ function classify(e) {
   if (/no hand/i.test(m)) return 'nohands';
   if (/^the camera model /.test(m)) return 'camera';
   return e && e.name === 'HaworError' ? 'core' : 'pipeline';
+}
+
+/// A live frame's info for the page: the hands seen (side, fitted, image keypoints), the frame's
+/// camera and fitted joints in the live world, and the live world when it was updated.
+function liveInfo(info) {
+  return {
+    index: info.index, ms: info.ms, slamStatus: info.slamStatus,
+    hands: info.hands.map((h) => ({ side: h.side, valid: h.valid, keypoints2d: h.keypoints2d ?? null })),
+    live: info.live ?? null, world: info.world ?? null,
+  };
 }
 
 /// Only what structured cloning carries, small: frame infos may hold typed arrays.
