@@ -139,7 +139,7 @@ void writeWorldNpz(const std::string& path, const hawor::PipelineResult<double>&
     z.set(p + "infilled", hawor::NpyArray::fromRaw("|b1", {T}, f));
   }
   std::vector<double> stamps(T);
-  for (size_t t = 0; t < T; ++t) stamps[t] = double(t) / r.fps;
+  for (size_t t = 0; t < T; ++t) stamps[t] = r.times[t];
   z.set("timestamps", hawor::NpyArray::fromVector(stamps));
   z.set("fps", hawor::NpyArray::fromData(&r.fps, {}));
   z.set("z_up", hawor::NpyArray::fromRaw("|b1", {}, {uint8_t(r.world.up != "none" ? 1 : 0)}));
@@ -256,7 +256,7 @@ int cmdWorld(int argc, char** argv) {
   writeWorldNpz(out + "/world.npz", r);
   std::vector<hawor::TumPose<double>> tum(static_cast<std::size_t>(r.frames));
   for (std::size_t t = 0; t < tum.size(); ++t) {
-    tum[t].t = double(t) / r.fps;
+    tum[t].t = r.times[t];
     tum[t].q = hawor::matrixToQuaternion(Eigen::Matrix3d(r.cameraPoses[t].rotationMatrix()));
     tum[t].p = r.cameraPoses[t].translation();
   }

@@ -20,6 +20,8 @@
 //       from another regressor; pose objects as HandModel.forward takes)
 //     .pushJoints(frame, {left: joints (63) | null, right: ...}) -> the same (camera-frame 3D
 //       joints from another regressor, metres, 21 in MediaPipe order; the model fitted to them)
+//     .stampFrame(seconds) the capture time of the frame just pushed (a source that drops
+//       frames: the result's timestamps and the hand cues' rate come from the stamps)
 //     .updateLiveWorld() -> {frames, scale, scaleMethod, scaleConfidence, up, upConfidence, origin}
 //       the causal world from the frames so far (live mode; every second or so)
 //     .live() -> {frame, posed, scale, cameraRotation (9, row-major), cameraPosition (3),
@@ -158,7 +160,7 @@ val resultToJs(const Result& r, const hawor::PipelineOptions<double>& opt, const
     for (int a = 0; a < 3; ++a) pos[3 * t + a] = P.translation()(a);
     const Eigen::Quaterniond q = hawor::matrixToQuaternion(Eigen::Matrix3d(P.rotationMatrix()));
     quat[4 * t] = q.x(), quat[4 * t + 1] = q.y(), quat[4 * t + 2] = q.z(), quat[4 * t + 3] = q.w();
-    stamps[t] = double(t) / r.fps;
+    stamps[t] = r.times[t];
     status[t] = static_cast<uint8_t>(s.status[t]);
   }
   val cam = val::object();
@@ -313,6 +315,10 @@ class Pipeline {
     });
   }
 
+  void stampFrame(double seconds) {
+    guard("Pipeline.stampFrame", [&] { p_.stampFrame(seconds); return 0; });
+  }
+
   val updateLiveWorld() {
     return guard("Pipeline.updateLiveWorld", [&] {
       const hawor::LiveWorld<double>& w = p_.updateLiveWorld();
@@ -427,6 +433,7 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
       .function("push", &Pipeline::push)
       .function("pushHands", &Pipeline::pushHands)
       .function("pushJoints", &Pipeline::pushJoints)
+      .function("stampFrame", &Pipeline::stampFrame)
       .function("updateLiveWorld", &Pipeline::updateLiveWorld)
       .function("live", &Pipeline::live)
       .function("finishCamera", &Pipeline::finishCamera)

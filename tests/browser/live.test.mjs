@@ -137,7 +137,8 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
     const p = Array.from(x.camera.positions);
     let finite = 0;
     for (let t = 0; t < x.frameCount; t++) if ([0, 1, 2].every((a) => Number.isFinite(p[3 * t + a]))) finite++;
-    return { T: x.frameCount, w: x.width, h: x.height, positions: p.length, finite, scale: x.scale && x.scale.method,
+    const ts = Array.from(x.camera.timestamps);
+    return { T: x.frameCount, w: x.width, h: x.height, positions: p.length, finite, scale: x.scale && x.scale.method, ts,
       left: x.hands.left.valid.reduce((a, b) => a + Number(b), 0), right: x.hands.right.valid.reduce((a, b) => a + Number(b), 0) };
   });
   assert.equal(end.running, false);
@@ -145,6 +146,11 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
   assert.equal(r.T, end.framesSent);
   assert.deepEqual([r.w, r.h], [640, 480]);
   assert.equal(r.positions, 3 * r.T);
+  // the timeline is the frames' capture times: increasing, and with frames dropped longer than
+  // the processed frames at the camera's 30 fps would span
+  assert.ok(r.ts[0] === 0 && r.ts.every((t, i) => i === 0 || t > r.ts[i - 1]), `timestamps ${r.ts.slice(0, 5)}`);
+  if (end.dropped > r.T) assert.ok(r.ts[r.T - 1] > 1.2 * (r.T - 1) / 30, `last timestamp ${r.ts[r.T - 1]} s for ${r.T} frames with ${end.dropped} dropped`);
+  delete r.ts;
   assert.ok(r.finite >= Math.min(r.T, end.cameraPoses), `camera poses in the result: ${JSON.stringify(r)}`);
   assert.ok(r.left + r.right > 0, `hands in the refined result: ${JSON.stringify(r)}`);
   const sum = await page.evaluate(() => window.haworApp.sceneSummary());

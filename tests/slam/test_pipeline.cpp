@@ -352,3 +352,37 @@ TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]
   CHECK_THROWS_WITH(p.finish(), Catch::Contains("twice"));
   CHECK_THROWS_WITH(p.push(im, {}), Catch::Contains("after finish"));
 }
+
+TEST_CASE("pipeline: frame times from a source that drops frames", "[pipeline]") {
+  hawor::PipelineOptions<double> po;
+  po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;
+  const hawor::ImageU8 grey(640, 480, 1, 90);
+  {
+    hawor::Pipeline<double> p(po, leftHand(), rightHand());
+    CHECK_THROWS_WITH(p.stampFrame(0.0), Catch::Contains("before the first frame"));
+    p.push(grey, {});
+    p.stampFrame(10.0);
+    p.push(grey, {});
+    CHECK_THROWS_WITH(p.stampFrame(10.0), Catch::Contains("is not after frame 0"));
+    CHECK_THROWS_WITH(p.stampFrame(NAN), Catch::Contains("not finite"));
+    p.stampFrame(10.1);
+    p.push(grey, {});
+    p.stampFrame(10.25);
+    CHECK(p.timelineFps() == Approx(2 / 0.25));  // the stamps' mean rate, not the options' 30
+    const hawor::PipelineResult<double> r = p.finish();
+    REQUIRE(r.times.size() == 3);
+    CHECK(r.times[0] == 0.0);
+    CHECK(r.times[1] == Approx(0.1));
+    CHECK(r.times[2] == Approx(0.25));
+    CHECK(r.fps == 30);  // the camera's
+  }
+  {
+    hawor::Pipeline<double> p(po, leftHand(), rightHand());
+    p.push(grey, {});
+    p.push(grey, {});
+    CHECK_THROWS_WITH(p.stampFrame(1.0), Catch::Contains("frame 0 was not"));
+    CHECK(p.timelineFps() == 30);
+    const hawor::PipelineResult<double> r = p.finish();
+    CHECK(r.times == std::vector<double>{0.0, 1.0 / 30});
+  }
+}

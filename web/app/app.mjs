@@ -330,7 +330,10 @@ function handOver(run, f) {
   }
   live.capture.set(f.index, f.time);
   run.credits--;
-  app.worker.postMessage({ type: 'frame', index: f.index, rgba: f.rgba.buffer }, [f.rgba.buffer]);
+  // the capture time in seconds (the pipeline's timeline: frames are dropped), strictly increasing
+  const time = Math.max(f.time / 1000, (live.lastTime ?? -Infinity) + 1e-6);
+  live.lastTime = time;
+  app.worker.postMessage({ type: 'frame', index: f.index, rgba: f.rgba.buffer, time }, [f.rgba.buffer]);
   if (f.index + 1 >= lim.maxFrames) stopLive(`the recording reached its bound of ${lim.maxFrames} processed frames`);
 }
 

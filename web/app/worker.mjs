@@ -261,7 +261,7 @@ self.onmessage = async (ev) => {
     switch (m.type) {
       case 'init': post({ type: 'ready', info: await init(m.urls) }); break;
       case 'start': start(m.meta, m.options); break;
-      case 'frame': if (state.run) state.run.frames.push({ index: m.index, rgba: new Uint8ClampedArray(m.rgba) }); break;
+      case 'frame': if (state.run) state.run.frames.push({ index: m.index, rgba: new Uint8ClampedArray(m.rgba), ...(m.time !== undefined ? { time: m.time } : {}) }); break;
       case 'end': if (state.run) state.run.frames.end(); break;
       case 'cancel': if (state.run) state.run.controller.abort(); break;
       case 'load-result': await loadResult(m.text, m.options || {}); break;

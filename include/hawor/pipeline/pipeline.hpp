@@ -243,6 +243,33 @@ class Pipeline {
     return info;
   }
 
+  /// The capture time (seconds) of the frame just pushed, for a source that drops frames (a live
+  /// camera hands over the newest frame whenever the pipeline is ready): the result's times and
+  /// the hand cues' frame rate (the frames' mean rate) then come from the stamps instead of the
+  /// options' fps, which stays the camera's (the rolling shutter's). Every frame or none;
+  /// increasing.
+  void stampFrame(Scalar seconds) {
+    const int f = frames() - 1;
+    if (f < 0) throw Error("pipeline: stampFrame() before the first frame");
+    if (!std::isfinite(double(seconds))) throw Error("pipeline: frame " + std::to_string(f) + "'s time is not finite");
+    if (static_cast<int>(times_.size()) != f) {
+      throw Error("pipeline: frame " + std::to_string(f) + " stamped but frame " + std::to_string(times_.size()) + " was not (stamp every frame or none)");
+    }
+    if (f > 0 && !(seconds > times_.back())) {
+      throw Error("pipeline: frame " + std::to_string(f) + "'s time " + std::to_string(double(seconds)) + " s is not after frame " +
+                  std::to_string(f - 1) + "'s " + std::to_string(double(times_.back())) + " s");
+    }
+    times_.push_back(seconds);
+  }
+
+  /// The frames' rate on the timeline: the stamps' mean rate when every frame was stamped, else
+  /// the options' fps.
+  Scalar timelineFps() const {
+    const int T = frames();
+    if (T >= 2 && static_cast<int>(times_.size()) == T) return Scalar(T - 1) / (times_.back() - times_.front());
+    return opt_.fps;
+  }
+
   /// The causal world (live mode): the metric scale and the gravity-aligned world from the cues
   /// of the frames so far (the tracker's poses and map, the fitted hands; no depth network), as
   /// finish() computes them from the refined ones. Until a cue gives a scale: the SLAM's units
@@ -258,7 +285,7 @@ class Pipeline {
     const std::vector<HandTrack<Scalar>> wrists = wristTracks();
     if (poses.size() >= 2 && (!wrists.empty() || !points.empty())) {
       MetricScaleOptions<Scalar> mo;
-      mo.setFps(opt_.fps);
+      mo.setFps(timelineFps());
       mo.ground.eyeHeight = opt_.eyeHeight;
       try {
         const MetricScaleResult<Scalar> r = estimateMetricScale({}, poses, wrists, mo, &points);
@@ -378,6 +405,9 @@ class Pipeline {
     PipelineResult<Scalar> res;
     res.frames = T;
     res.fps = opt_.fps;
+    const bool stamped = static_cast<int>(times_.size()) == T;
+    if (!times_.empty() && !stamped) warnings_.push_back("only the first " + std::to_string(times_.size()) + " of " + std::to_string(T) + " frames had a time: the times are frame / fps");
+    for (int t = 0; t < T; ++t) res.times.push_back(stamped ? times_[static_cast<std::size_t>(t)] - times_.front() : Scalar(t) / opt_.fps);
     res.camera = opt_.camera;
     res.camera.fx = focal_.fx, res.camera.fy = focal_.fy;
     res.lens = lens_.lens.toString();
@@ -696,7 +726,7 @@ class Pipeline {
     bool got = false;
     if (slam_result_.initialised && (!wrists.empty() || !keyframes.empty() || havePoints)) {
       MetricScaleOptions<Scalar> mo;
-      mo.setFps(opt_.fps);
+      mo.setFps(timelineFps());
       mo.ground.eyeHeight = opt_.eyeHeight;
       const std::vector<Vec3<Scalar>> none;
       try {
@@ -815,6 +845,7 @@ class Pipeline {
   ImageU8 grey_, rectified_, rectMask_;
   int greyFor_ = -1, predictedFor_ = -1;  ///< the frame grey_ holds and the one predict() saw
   LiveWorld<Scalar> live_;
+  std::vector<Scalar> times_;  ///< stampFrame's, per frame
   KeypointFlow<Scalar> flow_;
   int fitFailures_ = 0;
   bool handsGiven_ = false, cameraDone_ = false, finished_ = false;

@@ -72,6 +72,7 @@ template <typename Scalar>
 struct PipelineResult {
   int frames = 0;
   Scalar fps = Scalar(30);
+  std::vector<Scalar> times;        ///< (T) each frame's time in seconds (its stamp, else index / fps)
   PinholeCamera<Scalar> camera;            ///< the video's intrinsics (the focal refined when focal.refined)
   std::string lens = "pinhole";
   PipelineFocal<Scalar> focal;

@@ -7,7 +7,10 @@
 //   const result = await runPipeline(source, options, hooks);
 //
 // source  { width, height, fps, frameCount: number | null,
-//           frames: async iterable of { index, rgba: Uint8Array | Uint8ClampedArray } }
+//           frames: async iterable of { index, rgba: Uint8Array | Uint8ClampedArray, time? } }
+//         time (seconds, increasing; every frame or none): the frame's capture time, for a
+//         source that drops frames (a live camera): the result's timestamps and the hand cues'
+//         frame rate come from the times; fps stays the camera's (the rolling shutter's)
 //         rgba holds width*height*4 bytes (canvas ImageData) or width*height*3 (RGB from a
 //         decoder); frames are consumed one at a time and not kept (except, with a depth model,
 //         a copy at the SLAM resolution, see below).
@@ -422,6 +425,11 @@ export async function runPipeline(source, options, hooks = {}) {
         ['left', 'right'].forEach((side, s) => {
           if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s], keypoints2d: input[r.detection[s]].keypoints2d });
         });
+      }
+      if (frame.time !== undefined) {
+        // a source that drops frames gives their capture times (the timeline, the hand cues' rate)
+        if (typeof frame.time !== 'number') throw new Error(`frame ${T}: time must be a number of seconds`);
+        pipeline.stampFrame(frame.time);
       }
       if (options.live) {
         const every = options.liveWorldEvery ?? Math.max(1, Math.round(fps));
