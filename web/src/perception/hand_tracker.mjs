@@ -35,7 +35,8 @@ export class HandTracker {
    * @param palmModel    palm_detection_{full,lite}.onnx (path, URL or Uint8Array)
    * @param landmarkModel hand_landmark_{full,lite}.onnx
    * @param options      { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false,
-   *                       detectGap = 0, sessionOptions (default graphOptimizationLevel 'all') }
+   *                       detectGap = 0, sessionOptions (default graphOptimizationLevel 'all',
+   *                       the thread pool not spinning) }
    *                      detectGap: while at least one hand is tracked, the detector (looking for
    *                      the others) runs only after this many frames without it (0: every frame,
    *                      MediaPipe's behaviour); with no hand tracked it runs on every frame
@@ -61,7 +62,9 @@ export class HandTracker {
    *                    track was lost, or while that track coasts, keeps the track.
    */
   static async create(ort, palmModel, landmarkModel, options = {}) {
-    const so = { graphOptimizationLevel: 'all', ...(options.sessionOptions ?? {}) };
+    // The intra-op pool's threads sleep between calls instead of spinning: the networks alternate
+    // with the geometry (and a decoder) on the same few cores, which a spinning thread takes.
+    const so = { graphOptimizationLevel: 'all', extra: { session: { intra_op: { allow_spinning: '0' } } }, ...(options.sessionOptions ?? {}) };
     const palm = await ort.InferenceSession.create(palmModel, so);
     const landmark = await ort.InferenceSession.create(landmarkModel, so);
     return new HandTracker(ort, palm, landmark, options);
