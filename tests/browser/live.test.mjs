@@ -161,6 +161,7 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
   Object.assign(report, {
     framesCaptured: end.framesCaptured, framesProcessed: end.framesProcessed, dropped: end.dropped,
     fps: +end.fps.toFixed(2), latencyMsP50: Math.round(end.latencyMsP50), latencyMsP95: Math.round(end.latencyMsP95), latencyClock: end.latencyClock,
+    pipelineMsP50: Math.round(end.pipelineMsP50), pipelineMsP95: Math.round(end.pipelineMsP95),
     liveScale: end.scaleMethod === 'none' ? 'pending' : `${end.scaleMethod} ${Number(end.scale).toFixed(3)} (confidence ${Number(end.scaleConfidence).toFixed(2)})`,
     cameraPoses: end.cameraPoses, handsSeen: end.handsSeen, handsSeenBySide: end.handsSeenBySide, refinedScale: r.scale,
   });

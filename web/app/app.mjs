@@ -267,7 +267,7 @@ async function processVideo(url, name, sampleMeta = null) {
 function newLive() {
   return {
     stream: null, frames: null, size: null, camera: null, timer: null, stopping: false, stopReason: null,
-    processed: 0, capture: new Map(), latencies: [], tFirst: null, tLast: null, recent: [],
+    processed: 0, capture: new Map(), latencies: [], pipelineMs: [], tFirst: null, tLast: null, recent: [],
     scaleMethod: 'none', scale: null, scaleConfidence: null, up: 'none', cameraPoses: 0, handsSeen: 0, seen: { left: 0, right: 0 },
   };
 }
@@ -383,6 +383,7 @@ function onLiveFrame(info) {
   const tc = live.capture.get(info.index);
   live.capture.delete(info.index);
   if (tc !== undefined) live.latencies.push(t - tc);
+  if (Number.isFinite(info.ms)) live.pipelineMs.push(info.ms);
   if (live.tFirst === null) live.tFirst = t;
   live.tLast = t;
   live.recent.push(t);
@@ -410,6 +411,7 @@ function liveStats(l = app.live) {
     fps: l.processed > 1 ? (l.processed - 1) / ((l.tLast - l.tFirst) / 1000) : null,
     fpsRecent: span > 0 ? (l.recent.length - 1) / span : null,
     latencyMsP50: percentile(l.latencies, 0.5), latencyMsP95: percentile(l.latencies, 0.95), latencyClock: fr ? fr.clock : null,
+    pipelineMsP50: percentile(l.pipelineMs, 0.5), pipelineMsP95: percentile(l.pipelineMs, 0.95),
     scaleMethod: l.scaleMethod, scale: l.scale, scaleConfidence: l.scaleConfidence, up: l.up,
     cameraPoses: l.cameraPoses, handsSeen: l.handsSeen, handsSeenBySide: { ...l.seen },
     size: l.size && { width: l.size.width, height: l.size.height }, camera: l.camera,
@@ -676,7 +678,8 @@ app.view = { scene, overlay, setFrame, play, pause };
 app.sceneSummary = () => scene.summary();
 /// Live mode's statistics: { running, framesCaptured (camera frames since the first one handed
 /// over), framesSent, framesProcessed, dropped, fps, fpsRecent (last 2 s), latencyMsP50,
-/// latencyMsP95 (capture to the overlay drawn), latencyClock, scaleMethod, scale, scaleConfidence,
+/// latencyMsP95 (capture to the overlay drawn), pipelineMsP50 / P95 (the worker's time on a
+/// frame), latencyClock, scaleMethod, scale, scaleConfidence,
 /// up, cameraPoses (frames the SLAM posed), handsSeen (frames with a hand), handsSeenBySide, size,
 /// camera, stopReason }; null before the first live run.
 app.liveStats = () => liveStats();
