@@ -138,7 +138,8 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
     let finite = 0;
     for (let t = 0; t < x.frameCount; t++) if ([0, 1, 2].every((a) => Number.isFinite(p[3 * t + a]))) finite++;
     const ts = Array.from(x.camera.timestamps);
-    return { T: x.frameCount, w: x.width, h: x.height, positions: p.length, finite, scale: x.scale && x.scale.method, ts,
+    const stages = Object.fromEntries(Object.entries(x.timings).map(([k, v]) => [k, +(v / x.frameCount).toFixed(1)]));
+    return { T: x.frameCount, w: x.width, h: x.height, positions: p.length, finite, scale: x.scale && x.scale.method, ts, stages, tracker: x.stats,
       left: x.hands.left.valid.reduce((a, b) => a + Number(b), 0), right: x.hands.right.valid.reduce((a, b) => a + Number(b), 0) };
   });
   assert.equal(end.running, false);
@@ -151,6 +152,10 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
   assert.ok(r.ts[0] === 0 && r.ts.every((t, i) => i === 0 || t > r.ts[i - 1]), `timestamps ${r.ts.slice(0, 5)}`);
   if (end.dropped > r.T) assert.ok(r.ts[r.T - 1] > 1.2 * (r.T - 1) / 30, `last timestamp ${r.ts[r.T - 1]} s for ${r.T} frames with ${end.dropped} dropped`);
   delete r.ts;
+  report.stagesMsPerFrame = r.stages;
+  report.tracker = r.tracker;
+  delete r.stages;
+  delete r.tracker;
   assert.ok(r.finite >= Math.min(r.T, end.cameraPoses), `camera poses in the result: ${JSON.stringify(r)}`);
   assert.ok(r.left + r.right > 0, `hands in the refined result: ${JSON.stringify(r)}`);
   const sum = await page.evaluate(() => window.haworApp.sceneSummary());
@@ -162,6 +167,7 @@ test('live: frames flow with drops, hands and camera poses appear, Stop gives th
     framesCaptured: end.framesCaptured, framesProcessed: end.framesProcessed, dropped: end.dropped,
     fps: +end.fps.toFixed(2), latencyMsP50: Math.round(end.latencyMsP50), latencyMsP95: Math.round(end.latencyMsP95), latencyClock: end.latencyClock,
     pipelineMsP50: Math.round(end.pipelineMsP50), pipelineMsP95: Math.round(end.pipelineMsP95),
+    drawMsP50: Math.round(end.drawMsP50), drawMsP95: Math.round(end.drawMsP95),
     liveScale: end.scaleMethod === 'none' ? 'pending' : `${end.scaleMethod} ${Number(end.scale).toFixed(3)} (confidence ${Number(end.scaleConfidence).toFixed(2)})`,
     cameraPoses: end.cameraPoses, handsSeen: end.handsSeen, handsSeenBySide: end.handsSeenBySide, refinedScale: r.scale,
   });

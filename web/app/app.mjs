@@ -267,7 +267,7 @@ async function processVideo(url, name, sampleMeta = null) {
 function newLive() {
   return {
     stream: null, frames: null, size: null, camera: null, timer: null, stopping: false, stopReason: null,
-    processed: 0, capture: new Map(), latencies: [], pipelineMs: [], tFirst: null, tLast: null, recent: [],
+    processed: 0, capture: new Map(), latencies: [], pipelineMs: [], drawMs: [], tFirst: null, tLast: null, recent: [],
     scaleMethod: 'none', scale: null, scaleConfidence: null, up: 'none', cameraPoses: 0, handsSeen: 0, seen: { left: 0, right: 0 },
   };
 }
@@ -371,6 +371,7 @@ function onLiveFrame(info) {
   const run = app.run, live = run && run.live;
   if (!live || !live.size) return;
   live.processed++;
+  const tDraw = performance.now();
   overlay.drawLive({ width: live.size.width, height: live.size.height, hands: info.hands });
   const w = info.world, l = info.live;
   if (w) {
@@ -380,6 +381,7 @@ function onLiveFrame(info) {
   }
   scene.liveFrame(l);
   const t = performance.now();
+  live.drawMs.push(t - tDraw);
   const tc = live.capture.get(info.index);
   live.capture.delete(info.index);
   if (tc !== undefined) live.latencies.push(t - tc);
@@ -412,6 +414,7 @@ function liveStats(l = app.live) {
     fpsRecent: span > 0 ? (l.recent.length - 1) / span : null,
     latencyMsP50: percentile(l.latencies, 0.5), latencyMsP95: percentile(l.latencies, 0.95), latencyClock: fr ? fr.clock : null,
     pipelineMsP50: percentile(l.pipelineMs, 0.5), pipelineMsP95: percentile(l.pipelineMs, 0.95),
+    drawMsP50: percentile(l.drawMs, 0.5), drawMsP95: percentile(l.drawMs, 0.95),
     scaleMethod: l.scaleMethod, scale: l.scale, scaleConfidence: l.scaleConfidence, up: l.up,
     cameraPoses: l.cameraPoses, handsSeen: l.handsSeen, handsSeenBySide: { ...l.seen },
     size: l.size && { width: l.size.width, height: l.size.height }, camera: l.camera,
@@ -679,7 +682,7 @@ app.sceneSummary = () => scene.summary();
 /// Live mode's statistics: { running, framesCaptured (camera frames since the first one handed
 /// over), framesSent, framesProcessed, dropped, fps, fpsRecent (last 2 s), latencyMsP50,
 /// latencyMsP95 (capture to the overlay drawn), pipelineMsP50 / P95 (the worker's time on a
-/// frame), latencyClock, scaleMethod, scale, scaleConfidence,
+/// frame), drawMsP50 / P95 (the page's, drawing it: overlay and 3D view), latencyClock, scaleMethod, scale, scaleConfidence,
 /// up, cameraPoses (frames the SLAM posed), handsSeen (frames with a hand), handsSeenBySide, size,
 /// camera, stopReason }; null before the first live run.
 app.liveStats = () => liveStats();
