@@ -46,6 +46,7 @@
 #include "hawor/motion/canonical.hpp"
 #include "hawor/motion/infill.hpp"
 #include "hawor/motion/rest_root.hpp"
+#include "hawor/pipeline/hand_world.hpp"
 #include "hawor/pipeline/keypoint_flow.hpp"
 #include "hawor/pipeline/options.hpp"
 #include "hawor/pipeline/result.hpp"
@@ -428,7 +429,7 @@ class Pipeline {
       for (SE3<Scalar>& P : res.cameraPoses) P = res.world.fromFirstCamera * P;
       for (Vec3<Scalar>& X : res.points) X = res.world.fromFirstCamera * X;
     }
-    for (int side = 0; side < 2; ++side) toWorld(side, res.cameraPoses, res.hands[side]);
+    for (int side = 0; side < 2; ++side) handToWorld(*models_[side], res.cameraPoses, opt_.infill, res.hands[side], timings_);
     res.slam = std::move(slam_result_);
     res.warnings = warnings_;
     res.timings = timings_;
@@ -686,7 +687,6 @@ class Pipeline {
     h.present = std::any_of(h.valid.begin(), h.valid.end(), [](std::uint8_t v) { return v != 0; });
   }
 
-  /// The metric scale from the cues at hand; res.scale is 1 with method "none" when none gave one.
   /// Each seen hand's camera-frame wrist over the frames so far (the hand cues' input).
   std::vector<HandTrack<Scalar>> wristTracks() const {
     std::vector<HandTrack<Scalar>> wrists;
@@ -700,12 +700,13 @@ class Pipeline {
         any = any || o.fitted;
       }
       if (!any) continue;
-      if (opt_.handScaleSmooth > 0) smoothTrack(track, opt_.handScaleSmooth);
+      if (opt_.handScaleSmooth > 0) smoothHandTrack(track, opt_.handScaleSmooth);
       wrists.push_back(std::move(track));
     }
     return wrists;
   }
 
+  /// The metric scale from the cues at hand; res.scale is 1 with method "none" when none gave one.
   void metricScale(PipelineResult<Scalar>& res, const std::vector<const float*>& depthMaps) {
     const std::vector<HandTrack<Scalar>> wrists = wristTracks();
     std::vector<KeyframeDepthPairs<Scalar>> keyframes;
@@ -757,71 +758,6 @@ class Pipeline {
         warnings_.push_back("no metric scale could be estimated (no depth model, no usable hand cue, no floor in the map): the camera trajectory is in the SLAM's arbitrary units");
       }
     }
-  }
-
-  /// Centred moving average (half-width k, symmetric: no lag) within each run of valid frames.
-  static void smoothTrack(HandTrack<Scalar>& h, int k) {
-    const std::vector<Vec3<Scalar>> src = h.positionCam;
-    const int T = static_cast<int>(src.size());
-    for (int t = 0; t < T; ++t) {
-      if (!h.valid[static_cast<std::size_t>(t)]) continue;
-      int lo = t, hi = t;
-      while (lo > t - k && lo > 0 && h.valid[static_cast<std::size_t>(lo - 1)]) --lo;
-      while (hi < t + k && hi < T - 1 && h.valid[static_cast<std::size_t>(hi + 1)]) ++hi;
-      const int w = std::min(t - lo, hi - t);
-      Vec3<Scalar> sum = Vec3<Scalar>::Zero();
-      for (int u = t - w; u <= t + w; ++u) sum += src[static_cast<std::size_t>(u)];
-      h.positionCam[static_cast<std::size_t>(t)] = sum / Scalar(2 * w + 1);
-    }
-  }
-
-  /// Side s's motion in the world of the (metric) camera poses, the unseen frames filled, and its
-/// keypoints.
-  void toWorld(int s, const std::vector<SE3<Scalar>>& cameraPoses, PipelineHand<Scalar>& h) {
-    const Eigen::Index T = static_cast<Eigen::Index>(frames_.size());
-    const HandModel<Scalar>& model = *models_[s];
-    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-    h.infilled.assign(static_cast<std::size_t>(T), 0);
-    if (!h.present) {
-      h.world = h.camera;
-      h.jointsWorld = Sequence<Scalar>::Constant(T, 3 * kKeypoints, nan);
-      return;
-    }
-    auto t0 = Clock::now();
-    // cameraToWorld wants finite numbers everywhere: unobserved frames hold zeros
-    HandMotion<Scalar> cam = h.camera;
-    for (Sequence<Scalar>* a : {&cam.rot, &cam.trans, &cam.handPose, &cam.betas}) *a = a->unaryExpr([](Scalar v) { return std::isfinite(double(v)) ? v : Scalar(0); });
-    std::vector<Mat3<Scalar>> R;
-    std::vector<Vec3<Scalar>> t;
-    for (const SE3<Scalar>& P : cameraPoses) {
-      R.push_back(P.rotationMatrix());
-      t.push_back(P.translation());
-    }
-    HandMotion<Scalar> world = cameraToWorld(cam, R, t, restRootJoints(model, cam));
-    addTime("world", t0);
-    t0 = Clock::now();
-    for (Eigen::Index f = 0; f < T; ++f) {
-      if (h.valid[static_cast<std::size_t>(f)]) continue;
-      for (Sequence<Scalar>* a : {&world.rot, &world.trans, &world.handPose, &world.betas}) a->row(f).setConstant(nan);
-    }
-    InfillOptions<Scalar> io;
-    io.method = opt_.infill;
-    const InfillResult<Scalar> filled = infillHand(world, restRootJoints(model, world), io);
-    h.world = filled.motion;
-    h.infilled = filled.filled;
-    addTime("infill", t0);
-    t0 = Clock::now();
-    h.jointsWorld.resize(T, 3 * kKeypoints);
-    for (Eigen::Index f = 0; f < T; ++f) {
-      HandPose<Scalar> p = HandPose<Scalar>::zero(model);
-      p.rot = h.world.rot.row(f).transpose();
-      p.trans = h.world.trans.row(f).transpose();
-      std::copy(h.world.handPose.row(f).data(), h.world.handPose.row(f).data() + h.world.handPose.cols(), p.handPose.data());
-      if (h.world.betas.cols() > 0) p.betas = h.world.betas.row(f).transpose();
-      const Points3<Scalar> kp = forward(model, p).keypoints;
-      h.jointsWorld.row(f) = Eigen::Map<const Eigen::Matrix<Scalar, 1, 3 * kKeypoints>>(kp.data());
-    }
-    addTime("joints", t0);
   }
 
   PipelineOptions<Scalar> opt_;

@@ -2,6 +2,7 @@
 // (hand_scale.hpp): a hand's camera-frame metric positions per frame, and what a scale cue found.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
@@ -32,6 +33,24 @@ struct HandScaleResult {
   Scalar noiseAcrossRay = std::numeric_limits<Scalar>::quiet_NaN();
   bool ok() const { return std::isfinite(double(scale)) && scale > Scalar(0); }
 };
+
+/// Centred moving average of the positions (half-width k, symmetric: no lag) within each run of
+/// valid frames.
+template <typename Scalar>
+void smoothHandTrack(HandTrack<Scalar>& h, int k) {
+  const std::vector<Vec3<Scalar>> src = h.positionCam;
+  const int T = static_cast<int>(src.size());
+  for (int t = 0; t < T; ++t) {
+    if (!h.valid[static_cast<std::size_t>(t)]) continue;
+    int lo = t, hi = t;
+    while (lo > t - k && lo > 0 && h.valid[static_cast<std::size_t>(lo - 1)]) --lo;
+    while (hi < t + k && hi < T - 1 && h.valid[static_cast<std::size_t>(hi + 1)]) ++hi;
+    const int w = std::min(t - lo, hi - t);
+    Vec3<Scalar> sum = Vec3<Scalar>::Zero();
+    for (int u = t - w; u <= t + w; ++u) sum += src[static_cast<std::size_t>(u)];
+    h.positionCam[static_cast<std::size_t>(t)] = sum / Scalar(2 * w + 1);
+  }
+}
 
 namespace scale_detail {
 
