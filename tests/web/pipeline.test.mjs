@@ -258,6 +258,15 @@ test('pipeline: bad sources are refused with clear errors, aborts are prompt, a 
   for (const readout of [0.05, -0.05, NaN, '0.01']) {
     await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(1, 64, 48) }, { ...base, readout }), /rolling-shutter readout .* must lie within one frame interval \(±0\.0333 s\)/);
   }
+  // frame times (a source that drops frames): numbers, every frame or none, increasing
+  const timed = (times) => (async function* g() { for (let i = 0; i < times.length; ++i) yield { index: i, rgba: new Uint8Array(64 * 48 * 4).fill(128), ...(times[i] === undefined ? {} : { time: times[i] }) }; }());
+  await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: timed([1, 1.1, 1.05]) }, base), /frame 2's time 1\.05.* is not after frame 1's/);
+  await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: timed([undefined, 1.1]) }, base), /frame 1 stamped but frame 0 was not/);
+  await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: timed(['0.5']) }, base), /frame 0: time must be a number of seconds/);
+  const stamped = await runPipeline({ width: 64, height: 48, fps: 30, frames: timed([10, 10.1, 10.3]) }, base);
+  assert.deepEqual(Array.from(stamped.camera.timestamps).map((t) => +t.toFixed(6)), [0, 0.1, 0.3]);
+  // keypoint-flow options out of range
+  await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(1, 64, 48) }, { ...base, flow: { maxSkip: 31 } }), /keypoint flow: maxSkip must be in 0\.\.30/);
   // abort: the third frame finds the signal set
   const ac = new AbortController();
   await assert.rejects(runPipeline({ width: 64, height: 48, fps: 30, frames: frames(50, 64, 48) }, base, { signal: ac.signal, onFrame: (f) => { if (f.index === 1) ac.abort(); } }),
@@ -285,6 +294,10 @@ test('pipeline CLI: usage errors exit 2; not a video, no video stream exit 1; 1 
     assert.equal(r.status, 2); assert.match(r.stderr, /--readout is the rolling shutter's readout in seconds/);
     r = runCli(['run', 'x.mp4', '--out', dir, '--readout', 'slow']);
     assert.equal(r.status, 2); assert.match(r.stderr, /--readout/);
+    for (const v of ['31', '1.5', 'many']) {
+      r = runCli(['run', 'x.mp4', '--out', dir, '--flow-max-skip', v]);
+      assert.equal(r.status, 2); assert.match(r.stderr, /--flow-max-skip/);
+    }
     r = runCli(['run', join(dir, 'none.mp4'), '--out', dir]);
     assert.equal(r.status, 1); assert.match(r.stderr, /none\.mp4: no such file/);
     r = runCli(['run', cli, '--out', dir, '--depth-model', join(dir, 'none.onnx')]);
