@@ -114,7 +114,7 @@ TEMPLATE_TEST_CASE("the keypoint flow carries a hand moved by a similarity over 
   d.keypoints3d(8, 0) = S(0.05);  // the index tip 5 cm right of the hand's centre
   d.pRight = S(0.8);
   d.track = 7;
-  flow.observe({d}, {0});
+  flow.observe({d});
   flow.setFrame(render(bg, hand, w, h, c, r, a, b), 1, S(1));
   const auto& p = flow.predict();
   REQUIRE(p.size() == 1);
@@ -148,7 +148,7 @@ TEST_CASE("the keypoint flow works between the video's pixels and a smaller grey
   HandDetection<double> d;
   d.keypoints2d = kVideo;
   d.track = 1;
-  flow.observe({d}, {0});
+  flow.observe({d});
   flow.setFrame(render(bg, hand, w, h, c, 65, a, b), 11, 0.5);
   const auto& p = flow.predict();
   REQUIRE(p.size() == 1);
@@ -158,7 +158,7 @@ TEST_CASE("the keypoint flow works between the video's pixels and a smaller grey
     CHECK(p[0].keypoints2d(i, 1) == Approx(kVideo(i, 1) + 8).margin(0.6));
   }
   // a frame that does not follow: no hand is carried over it
-  flow.observe({d}, {0});
+  flow.observe({d});
   flow.setFrame(render(bg, hand, w, h, c, 65, a, b), 13, 0.5);
   CHECK(flow.predict().empty());
 }
@@ -187,7 +187,8 @@ TEST_CASE("the keypoint flow's schedule follows the network's agreement with it"
         d.keypoints2d = moved(k0, C(1, 0), b);
         if (t > 0) d.keypoints2d.col(0).array() += offset * (t % 2 ? 1 : -1);
       }
-      flow.observe({d}, {char(use ? 1 : 0)});
+      d.flow = use;
+      flow.observe({d});
     }
   };
   std::vector<int> good;

@@ -107,6 +107,12 @@ bool fitSimilarity2(const std::vector<std::complex<Scalar>>& z, const std::vecto
   return std::isfinite(out.a.real()) && std::isfinite(out.a.imag()) && std::isfinite(out.b.real()) && std::isfinite(out.b.imag());
 }
 
+/// A hand's size in pixels: the larger side of its keypoints' bounding box.
+template <typename Scalar>
+Scalar keypointExtent(const Pixels<Scalar>& kp) {
+  return std::max(kp.col(0).maxCoeff() - kp.col(0).minCoeff(), kp.col(1).maxCoeff() - kp.col(1).minCoeff());
+}
+
 template <typename Scalar>
 class KeypointFlow {
  public:
@@ -146,9 +152,9 @@ class KeypointFlow {
     return predictions_;
   }
 
-  /// The current frame's detections as the pipeline took them; flow[i]: detection i is a
-  /// prediction, not the network's. Updates each hand's schedule.
-  void observe(const std::vector<HandDetection<Scalar>>& dets, const std::vector<char>& flow) {
+  /// The current frame's detections as the pipeline took them (HandDetection::flow: a
+  /// prediction, not the network's). Updates each hand's schedule.
+  void observe(const std::vector<HandDetection<Scalar>>& dets) {
     std::vector<Hand> next;
     for (std::size_t i = 0; i < dets.size(); ++i) {
       const HandDetection<Scalar>& d = dets[i];
@@ -161,8 +167,7 @@ class KeypointFlow {
       h.keypoints2d = d.keypoints2d;
       h.keypoints3d = d.keypoints3d;
       h.pRight = d.pRight;
-      const bool byFlow = i < flow.size() && flow[i];
-      if (byFlow) {
+      if (d.flow) {
         h.sinceNetwork += 1;
       } else {
         if (old) adapt(h, d.keypoints2d);
@@ -196,12 +201,6 @@ class KeypointFlow {
     return nullptr;
   }
 
-  /// The hand's size in the video's pixels: the larger side of its keypoints' bounding box.
-  static Scalar handSize(const Pixels<Scalar>& kp) {
-    const Scalar w = kp.col(0).maxCoeff() - kp.col(0).minCoeff(), hgt = kp.col(1).maxCoeff() - kp.col(1).minCoeff();
-    return std::max(w, hgt);
-  }
-
   /// The network ran on h's hand: its error against this frame's prediction sets the next gap.
   void adapt(Hand& h, const Pixels<Scalar>& network) {
     for (const KeypointPrediction<Scalar>& p : predictions_) {
@@ -209,7 +208,7 @@ class KeypointFlow {
       std::array<Scalar, kNumKeypoints> e{};
       for (int k = 0; k < kNumKeypoints; ++k) e[std::size_t(k)] = (p.keypoints2d.row(k) - network.row(k)).norm();
       std::nth_element(e.begin(), e.begin() + kNumKeypoints / 2, e.end());
-      const Scalar err = e[kNumKeypoints / 2] / std::max(handSize(network), Scalar(1));
+      const Scalar err = e[kNumKeypoints / 2] / std::max(keypointExtent(network), Scalar(1));
       if (err < opt_.goodError) h.skip = std::min(opt_.maxSkip, h.skip + 1);
       else if (err > opt_.badError) h.skip /= 2;
       return;

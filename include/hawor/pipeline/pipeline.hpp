@@ -114,14 +114,9 @@ class Pipeline {
     checkFrame(image);
     const auto t0 = Clock::now();
     const int index = frames();
-    const ImageU8* g = &image;
-    if (image.channels != 1 || image.width != slamCam_.width || image.height != slamCam_.height) {
-      grey_.resize(slamCam_.width, slamCam_.height, 1);
-      downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
-      g = &grey_;
-      greyFor_ = index;
-    }
-    flow_.setFrame(*g, index, Scalar(slamCam_.width) / Scalar(opt_.camera.width));
+    const bool slamGrey = image.channels == 1 && image.width == slamCam_.width && image.height == slamCam_.height;
+    if (!slamGrey) makeGrey(image, index);
+    flow_.setFrame(slamGrey ? image : grey_, index, Scalar(slamCam_.width) / Scalar(opt_.camera.width));
     predictedFor_ = index;
     const auto& p = flow_.predict();
     addTime("flow", t0);
@@ -133,11 +128,7 @@ class Pipeline {
   FrameInfo push(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
     checkFrame(image);
     for (std::size_t i = 0; i < detections.size(); ++i) checkDetection(detections[i], i);
-    if (predictedFor_ == frames()) {
-      std::vector<char> byFlow(detections.size());
-      for (std::size_t i = 0; i < detections.size(); ++i) byFlow[i] = detections[i].flow ? 1 : 0;
-      flow_.observe(detections, byFlow);
-    }
+    if (predictedFor_ == frames()) flow_.observe(detections);
     frames_.emplace_back();
     const auto t0 = Clock::now();
     const std::array<int, 2> sides = assignSides(detections, sideState_, reach());
@@ -550,6 +541,13 @@ class Pipeline {
     return ok;
   }
 
+  /// grey_: frame `index`'s image downscaled to the SLAM's size in grey.
+  void makeGrey(const ImageU8& image, int index) {
+    grey_.resize(slamCam_.width, slamCam_.height, 1);
+    downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
+    greyFor_ = index;
+  }
+
   /// Masks, the SLAM's frame and the SLAM on the current frame.
   SlamStatus trackFrame(const ImageU8& image) {
     Observed& f = frames_.back();
@@ -569,9 +567,7 @@ class Pipeline {
     for (int s = 0; s < 2; ++s) {
       const Side& o = f.side[s];
       if (!o.fitted || !o.byFlow) continue;
-      const Scalar size = std::max(o.keypoints2d.col(0).maxCoeff() - o.keypoints2d.col(0).minCoeff(),
-                                   o.keypoints2d.col(1).maxCoeff() - o.keypoints2d.col(1).minCoeff());
-      const int grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * size * Scalar(slamCam_.width) / Scalar(opt_.camera.width)));
+      const int grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * keypointExtent(o.keypoints2d) * Scalar(slamCam_.width) / Scalar(opt_.camera.width)));
       if (grow <= 0) continue;
       HandMaskHand<Scalar> h;
       h.model = models_[s];
@@ -587,10 +583,7 @@ class Pipeline {
     // At the SLAM's own size the SLAM converts to grey itself.
     const ImageU8* slamFrame = &image;
     if (!atSlamSize || (withLens_ && image.channels != 1)) {
-      if (greyFor_ != frames() - 1) {  // predict() made it already
-        grey_.resize(slamCam_.width, slamCam_.height, 1);
-        downscaleBox(image.data.data(), image.width, image.height, image.channels, slamCam_.width, slamCam_.height, true, grey_.data.data());
-      }
+      if (greyFor_ != frames() - 1) makeGrey(image, frames() - 1);  // else predict() made it already
       slamFrame = &grey_;
     }
     const ImageU8* slamMask = mask.data.empty() ? nullptr : &mask;
