@@ -6,7 +6,13 @@
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]
+//   hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [run options]
+//   hawor batch --summary DIR [--json]
 //   (`hawor` is the npm package's bin; in a checkout: node web/cli.mjs ...)
+//
+// batch runs `hawor run` on its task's share of a corpus, one clip per child process, into
+// DIR/<clip id>/ with a status.json each (src/batch/task.mjs, docs/batch.md); exit code 1 when a
+// clip of the task failed (the others still ran).
 //
 // --sample runs the built-in synthetic sample (sample.webm, 60 frames of a table scene) with its
 // true focal from sample.json (unless --focal or --fov is given).
@@ -40,6 +46,8 @@ import { fileURLToPath } from 'node:url';
 import { builtFile, loadCore as loadCoreModule } from './src/core.mjs';
 import { runPipeline, cameraIntrinsics, MAX_PIXELS } from './src/pipeline/run.mjs';
 import { eyeHeightError } from './src/pipeline/eye_height.mjs';
+import { canonicalOptions, runTask, taskSlot } from './src/batch/task.mjs';
+import { formatSummary, summarize } from './src/batch/summary.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -47,11 +55,13 @@ const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
 const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]';
 
+const BATCH_USAGE = 'usage: hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [hawor run options]\n       hawor batch --summary DIR [--json]\n(the task index defaults to SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; clip i goes to task i mod M)';
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
 const fail = (msg) => Object.assign(new Error(msg), { exitCode: 1 });
 
 export function parseArgs(argv) {
   if (argv[0] === '--help' || argv[0] === '-h') return { help: true };
+  if (argv[0] === 'batch') return parseBatchArgs(argv);
   if (argv[0] !== 'run') throw usage(argv.length ? `unknown command '${argv[0]}'` : 'missing command');
   const o = { model: 'lite', threads: 2, infill: 'spline' };
   const num = (v, name, min) => {
@@ -98,6 +108,61 @@ export function parseArgs(argv) {
   if (o.depthConfig && !o.depthModel) throw usage('--depth-config needs --depth-model');
   if (o.eyeHeight !== undefined && o.groundScale === false) throw usage('give --eye-height or --no-ground-scale, not both');
   return o;
+}
+
+/** `hawor batch MANIFEST --out DIR [--task-index N] [--tasks M] [--force] [--clip-timeout S]
+ *  [run options]` or `hawor batch --summary DIR [--json]`. MANIFEST comes first; every option
+ *  that is not the batch's own is a `hawor run` option, checked here by run's parser. */
+export function parseBatchArgs(argv) {
+  const bad = (msg) => Object.assign(new Error(`${msg}\n${BATCH_USAGE}`), { exitCode: 2 });
+  const a = argv.slice(1);
+  if (a[0] === '--help' || a[0] === '-h') return { help: true, batch: true };
+  if (a[0] === '--summary') {
+    if (!a[1] || a[1].startsWith('--')) throw bad('--summary needs the batch\'s output folder');
+    const rest = a.slice(2);
+    if (rest.some((x) => x !== '--json')) throw bad(`unexpected argument '${rest.find((x) => x !== '--json')}' after --summary DIR`);
+    return { command: 'summary', out: a[1], json: rest.includes('--json') };
+  }
+  if (!a.length || a[0].startsWith('--')) throw bad('missing MANIFEST (a text file of video paths, or a folder of videos)');
+  const o = { command: 'batch', manifest: a[0], runArgs: [], force: false, clipTimeoutS: 3600 };
+  const int = (v, name, min) => {
+    if (v === undefined || !/^\d+$/.test(v) || Number(v) < min) throw bad(`${name} must be an integer >= ${min}, not '${v ?? ''}'`);
+    return Number(v);
+  };
+  for (let i = 1; i < a.length; ++i) {
+    const x = a[i];
+    if (x === '--out') { o.out = a[++i]; if (!o.out) throw bad('--out needs a folder'); }
+    else if (x === '--task-index') o.index = int(a[++i], '--task-index', 0);
+    else if (x === '--tasks') o.tasks = int(a[++i], '--tasks', 1);
+    else if (x === '--force') o.force = true;
+    else if (x === '--clip-timeout') o.clipTimeoutS = int(a[++i], '--clip-timeout', 0);
+    else if (x === '--sample') throw bad('--sample is not a batch option: list the clips in MANIFEST');
+    else o.runArgs.push(x);
+  }
+  if (!o.out) throw bad('--out DIR is required');
+  if (o.index !== undefined && o.tasks !== undefined && o.index >= o.tasks) throw bad(`--task-index ${o.index} must be below --tasks ${o.tasks}`);
+  // the run options, as `hawor run` would take them for each clip
+  try {
+    o.options = canonicalOptions(parseArgs(['run', 'CLIP', '--out', 'OUT', ...o.runArgs]));
+  } catch (e) {
+    throw bad(`run option: ${e.message.split('\n')[0]}`);
+  }
+  return o;
+}
+
+/** `hawor batch`: one task of the batch, or the summary of its output folder. */
+async function batchMain(o) {
+  if (o.help) { process.stdout.write(`${BATCH_USAGE}\n`); return 0; }
+  if (o.command === 'summary') {
+    const s = summarize(o.out);
+    process.stdout.write(`${o.json ? JSON.stringify(s) : formatSummary(o.out, s)}\n`);
+    return 0;
+  }
+  const slot = taskSlot({ index: o.index, tasks: o.tasks });
+  const r = await runTask({ ...o, ...slot, log: (l) => process.stderr.write(`hawor: ${l}\n`) });
+  const { clipsOut, ...counts } = r;
+  process.stdout.write(`${JSON.stringify({ out: o.out, task: slot.index, tasks: slot.tasks, ...counts, seconds: Number(r.seconds.toFixed(1)) })}\n`);
+  return r.failed ? 1 : 0;
 }
 
 /** ffprobe: width, height, fps, frame count (null when the container does not say). */
@@ -156,7 +221,11 @@ export async function* decodeFrames(video, width, height, scaleTo, maxFrames, ti
     if (ff.exitCode === null) ff.kill();
   }
   const code = await closed;
-  if (code !== 0 && err.trim()) throw fail(`ffmpeg: ${err.trim().split('\n').pop()}`);
+  if (code !== 0 && err.trim()) {
+    // ffmpeg's lines without their '[demuxer @ 0x...]' prefixes, the first (the cause) first
+    const lines = [...new Set(err.trim().split('\n').map((l) => l.replace(/^\[[^\]]*@ 0x[0-9a-f]+\]\s*/, '').trim()).filter(Boolean))];
+    throw fail(`${video}: cannot be decoded (ffmpeg: ${lines.join('; ').slice(0, 400)})`);
+  }
 }
 
 /** The core's module (src/core.mjs; a missing file is a bad-input error, exit code 1). */
@@ -279,7 +348,8 @@ async function useSample(o) {
 
 export async function main(argv) {
   const o = parseArgs(argv);
-  if (o.help) { process.stdout.write(`${USAGE}\n`); return 0; }
+  if (o.batch || o.command) return batchMain(o);
+  if (o.help) { process.stdout.write(`${USAGE}\n${BATCH_USAGE}\n`); return 0; }
   if (o.sample) await useSample(o);
   if (!existsSync(o.video)) throw fail(`${o.video}: no such file`);
   const models = await modelsDir(o);
