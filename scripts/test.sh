@@ -2,7 +2,8 @@
 # Runs every test: native (Release), the JavaScript tests under node (tests/web), parsers under
 # ASan+UBSan (+ libFuzzer briefly, clang), the same unit tests compiled to WebAssembly under
 # node, the browser app in headless Chromium (tests/browser), the npm package packed, installed
-# and run (tests/package), and the README's commands (tests/docs). Ends with "N passed, N failed".
+# and run (tests/package), the README's commands (tests/docs), and `hawor batch` as a job array
+# on a single-node Slurm started on localhost (tests/cluster). Ends with "N passed, N failed".
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -128,27 +129,51 @@ run_sanitize_suite() {
 # share build/native. HAWOR_NATIVE_CXX=g++ (or any compiler) overrides it.
 run_suite native env $(native_compiler_env) cmake -DCMAKE_BUILD_TYPE=Release
 run_suite wasm emcmake cmake -DCMAKE_BUILD_TYPE=Release
+# background NAME FUNCTION: runs FUNCTION in a background subshell, its output into a log that
+# collect NAME prints when it is done; the tallies come back through a file (a background
+# subshell has its own counters).
+background() {
+  local name=$1 fn=$2
+  rm -f "$log_dir/$name.tally"
+  (
+    total_pass=0 total_fail=0 status=0
+    "$fn"
+    echo "$total_pass $total_fail $status" >"$log_dir/$name.tally"
+  ) >"$log_dir/$name-stage.log" 2>&1 &
+  eval "${name}_pid=$!"
+}
+collect() {
+  local name=$1 pid_var="${1}_pid" sp sf ss
+  wait "${!pid_var}"
+  cat "$log_dir/$name-stage.log"
+  if [[ -f "$log_dir/$name.tally" ]] && read -r sp sf ss <"$log_dir/$name.tally"; then
+    total_pass=$((total_pass + sp)); total_fail=$((total_fail + sf))
+    ((ss == 0)) || status=1
+  else
+    echo "[$name] no tally" >&2; total_fail=$((total_fail + 1)); status=1
+  fi
+}
+
+# run_cluster_stage: hawor batch as a Slurm job array on a single-node cluster on localhost
+# (tests/cluster). Debian's slurmctld, slurmd, slurm-client and munge are installed here rather
+# than by scripts/install.sh (their packages would start services on a user's machine); without
+# them, or where the daemons cannot start, the test skips with the reason.
+run_cluster_stage() {
+  echo "=== [cluster] tests/cluster/slurm_local.sh install + node --test tests/cluster" >&2
+  bash tests/cluster/slurm_local.sh install 2>&1 || echo "[cluster] Slurm could not be installed: its test skips" >&2
+  run_node_stage cluster tests/cluster/*.test.mjs
+}
+
 # The sanitizer stage runs beside the node suite (after the WebAssembly build: the pipeline tests,
 # tests/web/pipeline.test.mjs, run its hawor_core.mjs), which leaves about a fifth of two cores
-# idle while its files wait on their child processes. Its output is printed when both are done;
-# its tallies come back through a file (a background subshell has its own counters).
-rm -f "$log_dir/sanitize.tally"
-(
-  total_pass=0 total_fail=0 status=0
-  run_sanitize_suite
-  echo "$total_pass $total_fail $status" >"$log_dir/sanitize.tally"
-) >"$log_dir/sanitize-stage.log" 2>&1 &
-sanitize_pid=$!
+# idle while its files wait on their child processes. The cluster stage runs beside the late
+# stages: it mostly waits on Slurm, and none of them measures time.
+background sanitize run_sanitize_suite
 run_node_suite
-wait "$sanitize_pid"
-cat "$log_dir/sanitize-stage.log"
-if [[ -f "$log_dir/sanitize.tally" ]] && read -r sp sf ss <"$log_dir/sanitize.tally"; then
-  total_pass=$((total_pass + sp)); total_fail=$((total_fail + sf))
-  ((ss == 0)) || status=1
-else
-  echo "[sanitize] no tally" >&2; total_fail=$((total_fail + 1)); status=1
-fi
+collect sanitize
+background cluster run_cluster_stage
 run_late_stages
+collect cluster
 
 echo "$total_pass passed, $total_fail failed"
 exit $status

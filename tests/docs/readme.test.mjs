@@ -12,7 +12,7 @@
 // registry (the JavaScript quick start installs the packed tarball).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, readdirSync, rmSync, writeFileSync } from 'node:fs';
 import { homedir, tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { spawn, spawnSync } from 'node:child_process';
@@ -46,7 +46,12 @@ const FILES = [
 // What some blocks must leave behind (the block is named by a string it contains).
 const EXPECT = [
   ['run ~/clips/kitchen.mp4 --out ~/hawor-out/kitchen --fov', (h) => resultFrames(join(h, 'hawor-out/kitchen'))],
-  ['for v in ~/clips/*.mp4', (h) => resultFrames(join(h, 'hawor-out/desk'))],
+  ['batch --summary ~/hawor-batch', (h, out) => {
+    assert.match(out, /: 2 clips .*: 2 ok, 0 failed/);
+    const desk = readdirSync(join(h, 'hawor-batch')).find((n) => n.startsWith('desk-'));
+    assert.ok(desk, 'a desk-<hash> clip folder');
+    resultFrames(join(h, 'hawor-batch', desk));
+  }],
   ['hawor world --images ~/frames/kitchen', (h, out) => {
     assert.ok(existsSync(join(h, 'hawor-out/kitchen-world/world.npz')) && existsSync(join(h, 'hawor-out/kitchen-world/camera.tum')));
     assert.equal(JSON.parse(out.trim().split('\n').pop()).frames, JSON.parse(readFileSync(join(h, 'hawor-out/kitchen/result.json'), 'utf8')).frameCount);

@@ -102,8 +102,14 @@ for p in sys.argv[1:]:
 test('taskSlot: given, Slurm job arrays (offset, count), Kubernetes indexed jobs, errors', () => {
   assert.deepEqual(taskSlot({}, {}), { index: 0, tasks: 1, from: 'default' });
   assert.deepEqual(taskSlot({ index: 2, tasks: 3 }, { SLURM_ARRAY_TASK_ID: '0' }), { index: 2, tasks: 3, from: 'given' });
-  assert.deepEqual(taskSlot({}, { SLURM_ARRAY_TASK_ID: '12', SLURM_ARRAY_TASK_MIN: '10', SLURM_ARRAY_TASK_COUNT: '4' }), { index: 2, tasks: 4, from: 'SLURM_ARRAY_TASK_ID' });
-  assert.deepEqual(taskSlot({}, { SLURM_ARRAY_TASK_ID: '3', SLURM_ARRAY_TASK_MIN: '0', SLURM_ARRAY_TASK_MAX: '4' }), { index: 3, tasks: 5, from: 'SLURM_ARRAY_TASK_ID' });
+  // --array=10-13: the span is the count
+  assert.deepEqual(taskSlot({}, { SLURM_ARRAY_TASK_ID: '12', SLURM_ARRAY_TASK_MIN: '10', SLURM_ARRAY_TASK_MAX: '13', SLURM_ARRAY_TASK_COUNT: '4' }), { index: 2, tasks: 4, from: 'SLURM_ARRAY_TASK_ID' });
+  // a resubmission of elements 1 and 3 of an array of 5 (Slurm then says COUNT=2, MIN=1, MAX=3):
+  // with --tasks the element is the share; without, a warning names the shares not run
+  const resub = { SLURM_ARRAY_TASK_ID: '3', SLURM_ARRAY_TASK_MIN: '1', SLURM_ARRAY_TASK_MAX: '3', SLURM_ARRAY_TASK_COUNT: '2' };
+  assert.deepEqual(taskSlot({ tasks: 5 }, resub), { index: 3, tasks: 5, from: 'SLURM_ARRAY_TASK_ID' });
+  assert.match(taskSlot({}, resub).warning, /2 elements over indices 1\.\.3/);
+  assert.throws(() => taskSlot({ tasks: 4 }, { SLURM_ARRAY_TASK_ID: '4' }), /outside 0\.\.3/);
   assert.deepEqual(taskSlot({ tasks: 8 }, { JOB_COMPLETION_INDEX: '7' }), { index: 7, tasks: 8, from: 'JOB_COMPLETION_INDEX' });
   assert.throws(() => taskSlot({}, { JOB_COMPLETION_INDEX: '1' }), /give --tasks/);
   assert.throws(() => taskSlot({ tasks: 2 }, { JOB_COMPLETION_INDEX: '2' }), /outside 0\.\.1/);
@@ -147,7 +153,7 @@ test('hawor batch end to end: two tasks, failures per clip, summary, rerun, kill
     assert.equal(t0.status, 1, t0.stderr); // a clip failed (the others ran)
     assert.match(t0.stderr, /line 5: .*hands\.mp4 is a duplicate of line 1/);
     // without --task-index: the slot from Slurm's variables
-    const t1s = spawnSync(process.execPath, [cli, 'batch', join(dir, 'clips.txt'), '--out', out, ...run], { encoding: 'utf8', timeout: 240000, env: { ...process.env, HAWOR_CORE: corePath, SLURM_ARRAY_TASK_ID: '1', SLURM_ARRAY_TASK_MIN: '0', SLURM_ARRAY_TASK_COUNT: '2' } });
+    const t1s = spawnSync(process.execPath, [cli, 'batch', join(dir, 'clips.txt'), '--out', out, ...run], { encoding: 'utf8', timeout: 240000, env: { ...process.env, HAWOR_CORE: corePath, SLURM_ARRAY_TASK_ID: '1', SLURM_ARRAY_TASK_MIN: '0', SLURM_ARRAY_TASK_MAX: '1', SLURM_ARRAY_TASK_COUNT: '2' } });
     assert.equal(t1s.status, 1, t1s.stderr);
     assert.deepEqual(JSON.parse(t1s.stdout), { out, task: 1, tasks: 2, clips: 2, ok: 0, skipped: 1, failed: 1, done: 0, seconds: JSON.parse(t1s.stdout).seconds });
     const ids = Object.fromEntries(readdirSync(out).filter((n) => !n.startsWith('.') && n !== 'batch.json').map((n) => [n.split('-')[0], n]));

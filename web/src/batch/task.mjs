@@ -21,18 +21,30 @@ export const PARTIAL_DIR = '.partial';
 const CLI = fileURLToPath(new URL('../../cli.mjs', import.meta.url));
 const VERSION = JSON.parse(readFileSync(new URL('../../../package.json', import.meta.url), 'utf8')).version;
 
-/** The task's index and the number of tasks: given, else from Slurm's job array
- *  (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN of SLURM_ARRAY_TASK_COUNT), else from a Kubernetes
- *  Indexed Job (JOB_COMPLETION_INDEX; the count must be given), else task 0 of 1. */
+/** The task's index and the number of tasks: given, else from Slurm's job array, else from a
+ *  Kubernetes Indexed Job (JOB_COMPLETION_INDEX; the count must be given), else task 0 of 1.
+ *  Slurm: with --tasks M the index is SLURM_ARRAY_TASK_ID itself (0-based elements; this is what
+ *  lets a resubmission of some elements, `--array=3,7`, take the same shares); without it the
+ *  array's span is the count (SLURM_ARRAY_TASK_MIN..MAX, so --array=1-8 works too). Slurm's own
+ *  SLURM_ARRAY_TASK_COUNT counts the elements of the submission, not the shares. */
 export function taskSlot(given, env = process.env) {
   const int = (v) => (v !== undefined && /^\d+$/.test(String(v).trim()) ? Number(v) : undefined);
   let index = given.index;
   let tasks = given.tasks;
   let from = 'given';
+  let warning = null;
   if (index === undefined && int(env.SLURM_ARRAY_TASK_ID) !== undefined) {
-    index = int(env.SLURM_ARRAY_TASK_ID) - (int(env.SLURM_ARRAY_TASK_MIN) ?? 0);
-    tasks ??= int(env.SLURM_ARRAY_TASK_COUNT) ?? (int(env.SLURM_ARRAY_TASK_MAX) !== undefined ? int(env.SLURM_ARRAY_TASK_MAX) - (int(env.SLURM_ARRAY_TASK_MIN) ?? 0) + 1 : undefined);
     from = 'SLURM_ARRAY_TASK_ID';
+    const id = int(env.SLURM_ARRAY_TASK_ID);
+    if (tasks !== undefined) index = id;
+    else {
+      const min = int(env.SLURM_ARRAY_TASK_MIN) ?? 0;
+      const max = int(env.SLURM_ARRAY_TASK_MAX) ?? id;
+      index = id - min;
+      tasks = max - min + 1;
+      const count = int(env.SLURM_ARRAY_TASK_COUNT);
+      if (count !== undefined && count < tasks) warning = `the job array has ${count} elements over indices ${min}..${max}: the shares of the missing indices are not run (give --tasks M and 0-based elements to run some shares again)`;
+    }
   } else if (index === undefined && int(env.JOB_COMPLETION_INDEX) !== undefined) {
     index = int(env.JOB_COMPLETION_INDEX);
     from = 'JOB_COMPLETION_INDEX';
@@ -40,7 +52,7 @@ export function taskSlot(given, env = process.env) {
   if (index === undefined) return { index: 0, tasks: tasks ?? 1, from: 'default' };
   if (tasks === undefined) throw Object.assign(new Error(`the task index comes from ${from} but the number of tasks is unknown: give --tasks M`), { exitCode: 2 });
   if (!(index >= 0 && index < tasks)) throw Object.assign(new Error(`task index ${index} (${from}) is outside 0..${tasks - 1} (--tasks ${tasks})`), { exitCode: 2 });
-  return { index, tasks, from };
+  return warning ? { index, tasks, from, warning } : { index, tasks, from };
 }
 
 /** The run options as compared between runs: the parsed `hawor run` options without the video
@@ -186,11 +198,18 @@ export async function runTask(o) {
   return { ...tally, seconds: (performance.now() - t0) / 1000 };
 }
 
+/** The engine's ids of this task, when it runs under one (for finding its log). */
+function engineIds(env = process.env) {
+  if (env.SLURM_JOB_ID) return { slurm: { jobId: env.SLURM_JOB_ID, arrayJobId: env.SLURM_ARRAY_JOB_ID ?? null, arrayTaskId: env.SLURM_ARRAY_TASK_ID ?? null } };
+  if (env.JOB_COMPLETION_INDEX !== undefined) return { kubernetes: { pod: env.HOSTNAME ?? null, completionIndex: env.JOB_COMPLETION_INDEX } };
+  return {};
+}
+
 /** One clip: its id, the check against an earlier status, the run, status.json, the publish. */
 async function processClip(c, o, live) {
   const started = new Date();
   const base = { source: c.path, manifestLine: c.line, options: o.options, runArgs: o.runArgs, hawor: VERSION,
-    task: { index: o.index, tasks: o.tasks, host: hostname(), slurmJobId: process.env.SLURM_JOB_ID ?? null } };
+    task: { index: o.index, tasks: o.tasks, host: hostname(), ...engineIds() } };
   let id;
   let unreadable = null;
   try {
