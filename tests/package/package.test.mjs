@@ -28,9 +28,9 @@ let work, tarball, project, installed;
 
 // Children run without the suite's HAWOR_* variables: the installed package finds its own files.
 const env = Object.fromEntries(Object.entries(process.env).filter(([k]) => !k.startsWith('HAWOR_')));
-function run(cmd, args, cwd, timeout = 120000) {
+function run(cmd, args, cwd, timeout = 120000, extraEnv = {}) {
   const t0 = Date.now();
-  const r = spawnSync(cmd, args, { cwd, env, encoding: 'utf8', timeout, maxBuffer: 64 << 20 });
+  const r = spawnSync(cmd, args, { cwd, env: { ...env, ...extraEnv }, encoding: 'utf8', timeout, maxBuffer: 64 << 20 });
   r.ms = Date.now() - t0;
   if (r.error) throw new Error(`${cmd} ${args.join(' ')}: ${r.error.message}`);
   return r;
@@ -97,7 +97,8 @@ test('the installed package: npx hawor --help, run --sample, networks converted 
   rmSync(project, { recursive: true, force: true });
   spawnSync('mkdir', ['-p', project]);
   writeFileSync(join(project, 'package.json'), '{ "name": "hawor-package-test", "private": true }\n');
-  let r = run('npm', ['install', '--no-audit', '--no-fund', '--prefer-offline', '--loglevel=error', tarball], project, 240000);
+  // onnxruntime-node (optional) without its CUDA download, as the README says
+  let r = run('npm', ['install', '--no-audit', '--no-fund', '--prefer-offline', '--loglevel=error', tarball], project, 240000, { ONNXRUNTIME_NODE_INSTALL: 'skip' });
   ok(r, 'npm install of the tarball');
   timings.install = r.ms;
   installed = join(project, 'node_modules/hawor');
@@ -116,6 +117,7 @@ test('the installed package: npx hawor --help, run --sample, networks converted 
   assert.match(r.stderr, new RegExp(`the built-in sample ${join(installed, 'dist/sample.webm').replace(/[.*+?^${}()|[\]\\]/g, '\\$&')}`));
   const summary = JSON.parse(r.stdout.trim().split('\n').pop());
   assert.equal(summary.frames, 30);
+  assert.equal(summary.runtime, 'native', 'the optional onnxruntime-node was installed and runs the networks');
   assert.equal(summary.focalGuess ?? summary.focal, sample.fx, 'the sample\'s true focal is the starting focal');
   assert.ok(summary.leftFrames + summary.rightFrames > 0, JSON.stringify(summary));
   const result = JSON.parse(readFileSync(join(out, 'result.json'), 'utf8'));

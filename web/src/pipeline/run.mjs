@@ -64,6 +64,9 @@
 //                                        a lens, of the rectified frame it is given
 //           threads?                     onnxruntime's threads (ort.env.wasm.numThreads, set here
 //                                        if given; only effective before its first session)
+//           sessionOptions?              onnxruntime session options for the networks (merged
+//                                        over the defaults; e.g. onnxruntime-node's
+//                                        { executionProviders: ['cpu'], intraOpNumThreads })
 //           slamMaxSide? (640)           the SLAM and hand masks run on frames downscaled to
 //                                        this long side (intrinsics scaled alike)
 //           maxPixels? (MAX_PIXELS)      larger frames are refused with a clear error (the
@@ -356,7 +359,7 @@ export async function runPipeline(source, options, hooks = {}) {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
           throw new Error('runPipeline: options.models.palm and .landmark (ONNX bytes) are required');
         }
-        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops });
+        tracker = await HandTracker.create(ort, m.palm, m.landmark, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops, sessionOptions: options.sessionOptions });
       }
     }
     if (options.depthModel && typeof options.depthModel.predict === 'function') {
@@ -364,7 +367,7 @@ export async function runPipeline(source, options, hooks = {}) {
       depthModel = { predict: (rgb, w, h, c, frame) => custom.predict(frame, rgb, w, h) };
     } else if (options.depthModel) {
       if (!options.ort) throw new Error('runPipeline: a depth model needs options.ort');
-      depthModel = await DepthModel.create(options.ort, options.depthModel.bytes, options.depthModel.config);
+      depthModel = await DepthModel.create(options.ort, options.depthModel.bytes, options.depthModel.config, options.sessionOptions);
     }
     addTime('load', now() - t0);
 
