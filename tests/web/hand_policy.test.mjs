@@ -21,16 +21,20 @@ const logit = (p) => Math.log(p / (1 - p));
 /** A palm session returning candidates [{ cell: [x, y] of the 24 x 24 grid, score }]: a 40 px box
  *  on that anchor (192 px input), wrist 10 px below and middle MCP 10 px above its centre. */
 function palmSession(candidates) {
-  const reg = new Float32Array(2016 * 18);
-  const sc = new Float32Array(2016).fill(-20);
-  for (const { cell: [x, y], score } of candidates) {
-    const a = 2 * (y * 24 + x);
-    sc[a] = logit(score);
-    reg.set([0, 0, 40, 40], a * 18);
-    reg.set([0, 10], a * 18 + 4); // wrist
-    reg.set([0, -10], a * 18 + 8); // keypoint 2, the middle-finger MCP
-  }
-  return { inputNames: ['input_1'], outputNames: ['Identity', 'Identity_1'], run: async () => ({ Identity: T(reg), Identity_1: T(sc) }) };
+  // candidates: a list, or a function giving the list of the run
+  const outputs = (list) => {
+    const reg = new Float32Array(2016 * 18);
+    const sc = new Float32Array(2016).fill(-20);
+    for (const { cell: [x, y], score } of list) {
+      const a = 2 * (y * 24 + x);
+      sc[a] = logit(score);
+      reg.set([0, 0, 40, 40], a * 18);
+      reg.set([0, 10], a * 18 + 4); // wrist
+      reg.set([0, -10], a * 18 + 8); // keypoint 2, the middle-finger MCP
+    }
+    return { Identity: T(reg), Identity_1: T(sc) };
+  };
+  return { inputNames: ['input_1'], outputNames: ['Identity', 'Identity_1'], run: async () => outputs(typeof candidates === 'function' ? candidates() : candidates) };
 }
 
 /** A landmark session whose presence (and P(class 0), handedness) each call takes from
@@ -186,4 +190,29 @@ test('prefilter: footprint 0 is bilinear sampling, a box averages noise away, ou
 
 test('the pipeline\'s tracker policy names only options the tracker has', () => {
   assert.deepEqual(Object.keys(PIPELINE_TRACKER_OPTIONS).sort(), ['candidatePresence', 'candidateScore', 'coast', 'maxCandidates', 'motion', 'palmPrefilter', 'redetectOnLoss']);
+});
+
+test('detectBackoff: empty detector runs with a hand tracked double the gap up to the cap; a found hand resets it', async () => {
+  // one hand tracked throughout (presence 0.9); the detector finds nothing on frames 0-11, then
+  // a palm whose crop is a second hand from frame 12 on
+  let frame = 0;
+  let palms = [];
+  const palm = palmSession(() => palms);
+  const runs = [];
+  const tr = new HandTracker(ort, palm, landmarkSession(() => ({ presence: 0.9 })), { minPresence: 0.3, detectGap: 1, detectBackoff: 4 });
+  const detect = tr.detectPalms.bind(tr);
+  tr.detectPalms = async (img, o) => { runs.push(frame); return detect(img, o); };
+  tr.tracked = [{ cx: 50, cy: 96, w: 60, h: 60, rotation: 0 }];
+  for (; frame < 12; ++frame) await tr.track(image);
+  // gaps 1, 2, 4, 4: runs on frames 1, 4, 9 (and none in between)
+  assert.deepEqual(runs, [1, 4, 9]);
+  palms = [{ cell: [20, 20], score: 0.9 }];
+  for (; frame < 20; ++frame) await tr.track(image);
+  assert.ok(runs.includes(14), `the next run after the cap (frame 14): ${runs}`);
+  assert.equal(tr.gap, 1, 'a hand found restores detectGap');
+  // off (the offline default): every detectGap + 1 frames
+  const plain = new HandTracker(ort, palmSession([]), landmarkSession(() => ({ presence: 0.9 })), { minPresence: 0.3, detectGap: 1 });
+  plain.tracked = [{ cx: 50, cy: 96, w: 60, h: 60, rotation: 0 }];
+  for (let f = 0; f < 12; ++f) await plain.track(image);
+  assert.equal(plain.stats.palmRuns, 6);
 });

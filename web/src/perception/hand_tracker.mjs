@@ -40,6 +40,9 @@ export class HandTracker {
    *                      detectGap: while at least one hand is tracked, the detector (looking for
    *                      the others) runs only after this many frames without it (0: every frame,
    *                      MediaPipe's behaviour); with no hand tracked it runs on every frame
+   *                      detectBackoff (0: off): while at least one hand is tracked, each detector
+   *                      run that adds no hand doubles that gap, up to this many frames; a hand
+   *                      found or a track lost restores detectGap (a time budget: the live mode's)
    *                      lens: a camera with a lens, { cropMap(roi, n) -> { map: Float32Array(2n²),
    *                      rotation: (9) }, cropToImage(roi, uv: Float64Array) -> Float64Array }
    *                      (the core's LensCamera); null or absent: affine crops (a pinhole camera)
@@ -70,12 +73,14 @@ export class HandTracker {
     return new HandTracker(ort, palm, landmark, options);
   }
 
-  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0, lens = null,
+  constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0, detectBackoff = 0, lens = null,
     candidateScore = minPalmScore, candidatePresence = minPresence, maxCandidates = maxHands, palmPrefilter = 0, redetectOnLoss = false,
     motion = false, coast = 0 } = {}) {
     Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap, lens });
     Object.assign(this, { candidateScore, candidatePresence, maxCandidates, palmPrefilter, redetectOnLoss, motion, coast });
     this.framesWithoutDetect = 0;
+    this.detectBackoff = detectBackoff;
+    this.gap = detectGap; // the current gap (detectGap, or backed off)
     for (const [s, what, n] of [[palmSession, 'palm', 2], [landmarkSession, 'landmark', 4]]) {
       if (s.inputNames.length !== 1 || s.outputNames.length !== n) {
         throw new Error(`HandTracker: the ${what} model has ${s.inputNames.length} inputs / ${s.outputNames.length} outputs, expected 1 / ${n}`);
@@ -241,8 +246,10 @@ export class HandTracker {
       if (moved(st) < moved(owners[dup])) owners[dup] = st;
       if (h.presence > hands[dup].presence) hands[dup] = { ...h, source: flow ? 'flow' : 'track' };
     }
-    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.detectGap || (this.redetectOnLoss && lost.length > 0));
+    if (lost.length > 0) this.gap = this.detectGap;
+    const detect = hands.length < this.maxHands && (hands.length === 0 || this.framesWithoutDetect >= this.gap || (this.redetectOnLoss && lost.length > 0));
     this.framesWithoutDetect = detect ? 0 : this.framesWithoutDetect + 1;
+    const before = hands.length;
     if (detect) {
       // palm candidates down to candidateScore, each confirmed by the landmark network's presence
       // on its crop (minPresence above minPalmScore, candidatePresence below)
@@ -267,6 +274,10 @@ export class HandTracker {
         hands.push({ ...h, palm, source: 'detect' });
         owners.push(this.revive(lost, roiFromLandmarks(h.landmarks)) ?? this.newTrack(roi));
       }
+    }
+    if (detect && this.detectBackoff > this.detectGap) {
+      // an empty run with a hand tracked backs off (1, 2, 4, ... frames); a new hand resets
+      this.gap = hands.length > before || before === 0 ? this.detectGap : Math.min(this.detectBackoff, Math.max(1, 2 * this.gap));
     }
     hands.forEach((h, j) => this.confirm(owners[j], h));
     // lost tracks within `coast` misses are looked for again on the next frame, while there is room

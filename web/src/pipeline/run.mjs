@@ -191,6 +191,11 @@ export const PIPELINE_TRACKER_OPTIONS = Object.freeze({
   candidateScore: 0.1, candidatePresence: 0.5, maxCandidates: 2, palmPrefilter: 0.5, redetectOnLoss: true, motion: true, coast: 1,
 });
 
+/** Live (options.live), a frame's time is bounded: while a hand is tracked, the detector looking
+ *  for the other backs off after runs that find nothing (2, 4, 8 frames), so that a hand out of
+ *  view does not cost the palm detector and its candidates' checks on every other frame. */
+export const PIPELINE_LIVE_TRACKER_OPTIONS = Object.freeze({ detectBackoff: 4 });
+
 function abortError() {
   const e = new Error('the pipeline was aborted');
   e.name = 'AbortError';
@@ -352,7 +357,7 @@ export async function runPipeline(source, options, hooks = {}) {
       const m = options.models ?? {};
       const detectGap = options.detectGap ?? PIPELINE_DETECT_GAP;
       const minPresence = options.minPresence ?? PIPELINE_MIN_PRESENCE;
-      const policy = { ...PIPELINE_TRACKER_OPTIONS, ...(options.tracker ?? {}) };
+      const policy = { ...PIPELINE_TRACKER_OPTIONS, ...(options.live ? PIPELINE_LIVE_TRACKER_OPTIONS : {}), ...(options.tracker ?? {}) };
       if (m.palmSession && m.landmarkSession) {
         tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops });
       } else {
