@@ -226,6 +226,26 @@ test('hawor batch end to end: two tasks, failures per clip, summary, rerun, kill
         if (mounted) spawnSync('umount', [ro]);
       }
     }
+    // a full disk (a 32 KB tmpfs): each clip fails with the reason, the next still runs, nothing
+    // half-written is left
+    const full = join(dir, 'full');
+    mkdirSync(full);
+    if (spawnSync('mount', ['-t', 'tmpfs', '-o', 'size=32k', 'tmpfs', full]).status === 0) {
+      try {
+        const r = batch([join(dir, 'clips.txt'), '--out', full, ...run]);
+        assert.equal(r.status, 1, r.stderr);
+        const j = JSON.parse(r.stdout);
+        assert.equal(j.failed + j.skipped + j.ok, 4, r.stdout);
+        assert.ok(j.failed >= 3, r.stdout); // the clip with hands and the two unreadable ones at least
+        assert.match(r.stderr, /ENOSPC|no space/i);
+        assert.match(r.stderr, /4\/4 /, 'the last clip was reached');
+        assert.deepEqual(readdirSync(join(full, '.partial')).filter((n) => !n.startsWith('.probe')), []);
+      } finally {
+        spawnSync('umount', [full]);
+      }
+    } else {
+      t.diagnostic('full-disk check skipped: cannot mount a tmpfs here');
+    }
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }

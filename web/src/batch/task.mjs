@@ -186,7 +186,16 @@ export async function runTask(o) {
     for (let k = 0; k < mine.length; ++k) {
       const c = mine[k];
       const tag = `[task ${o.index}/${o.tasks}] ${k + 1}/${mine.length}`;
-      const r = await processClip(c, o, live);
+      let r;
+      try {
+        r = await processClip(c, o, live);
+      } catch (e) {
+        // the task's own failure on this clip (a full disk, a folder renamed under it): the clip
+        // counts as failed, its partial output goes, the next clip runs
+        if (live.partial) rmSync(live.partial, { recursive: true, force: true });
+        live.partial = null;
+        r = { id: c.path, status: 'failed', reason: `could not be written: ${e.message}`, counted: 'failed' };
+      }
       tally[r.counted] += 1;
       tally.clipsOut.push({ id: r.id, status: r.status, seconds: r.seconds });
       o.log(`${tag} ${r.id}: ${r.counted === 'done' ? 'done already' : r.status}${r.reason ? ` (${r.reason})` : ''}${r.seconds !== undefined ? `, ${r.seconds.toFixed(1)} s` : ''}`);
