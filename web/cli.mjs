@@ -166,8 +166,7 @@ async function batchMain(o) {
   const slot = taskSlot({ index: o.index, tasks: o.tasks });
   if (slot.warning) process.stderr.write(`hawor: warning: ${slot.warning}\n`);
   const r = await runTask({ ...o, ...slot, log: (l) => process.stderr.write(`hawor: ${l}\n`) });
-  const { clipsOut, ...counts } = r;
-  process.stdout.write(`${JSON.stringify({ out: o.out, task: slot.index, tasks: slot.tasks, ...counts, seconds: Number(r.seconds.toFixed(1)) })}\n`);
+  process.stdout.write(`${JSON.stringify({ out: o.out, task: slot.index, tasks: slot.tasks, ...r, seconds: Number(r.seconds.toFixed(1)) })}\n`);
   return r.failed ? 1 : 0;
 }
 

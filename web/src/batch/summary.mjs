@@ -4,7 +4,7 @@
 
 import { existsSync, readFileSync, readdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { BATCH_FILE, PARTIAL_DIR, STATUS_FILE } from './task.mjs';
+import { BATCH_FILE, PARTIAL_DIR, STATUS_FILE, readStatus } from './task.mjs';
 
 const median = (v) => {
   if (!v.length) return null;
@@ -31,9 +31,8 @@ export function summarize(out) {
   const statuses = [];
   for (const e of readdirSync(out, { withFileTypes: true })) {
     if (!e.isDirectory() || e.name.startsWith('.')) continue;
-    try {
-      statuses.push(JSON.parse(readFileSync(join(out, e.name, STATUS_FILE), 'utf8')));
-    } catch { /* not a clip folder */ }
+    const st = readStatus(join(out, e.name));
+    if (st) statuses.push(st); // else not a clip folder
   }
   if (!batch && !statuses.length) throw fail(`${out}: not a batch output folder (no ${BATCH_FILE}, no clip folders with ${STATUS_FILE})`);
   const latest = new Map();

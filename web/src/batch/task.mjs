@@ -62,7 +62,8 @@ export function canonicalOptions(parsed) {
   return Object.fromEntries(Object.entries(rest).sort(([a], [b]) => (a < b ? -1 : 1)));
 }
 
-function readStatus(dir) {
+/** A clip folder's status.json, or null (none, or unreadable). */
+export function readStatus(dir) {
   try {
     return JSON.parse(readFileSync(join(dir, STATUS_FILE), 'utf8'));
   } catch {
@@ -154,8 +155,7 @@ function realCause(path, e) {
 
 /**
  * Runs one task. o: { manifest, out, runArgs: [strings], options: canonical run options, index,
- * tasks, force, clipTimeoutS, log(line) }. Returns { clips, ok, skipped, failed, done, seconds,
- * clipsOut: [{id, status, seconds}] }.
+ * tasks, force, clipTimeoutS, log(line) }. Returns { clips, ok, skipped, failed, done, seconds }.
  */
 export async function runTask(o) {
   const t0 = performance.now();
@@ -181,7 +181,7 @@ export async function runTask(o) {
   process.on('SIGTERM', onSignal);
   process.on('SIGINT', onSignal);
 
-  const tally = { clips: mine.length, ok: 0, skipped: 0, failed: 0, done: 0, clipsOut: [] };
+  const tally = { clips: mine.length, ok: 0, skipped: 0, failed: 0, done: 0 };
   try {
     for (let k = 0; k < mine.length; ++k) {
       const c = mine[k];
@@ -197,7 +197,6 @@ export async function runTask(o) {
         r = { id: c.path, status: 'failed', reason: `could not be written: ${e.message}`, counted: 'failed' };
       }
       tally[r.counted] += 1;
-      tally.clipsOut.push({ id: r.id, status: r.status, seconds: r.seconds });
       o.log(`${tag} ${r.id}: ${r.counted === 'done' ? 'done already' : r.status}${r.reason ? ` (${r.reason})` : ''}${r.seconds !== undefined ? `, ${r.seconds.toFixed(1)} s` : ''}`);
     }
   } finally {

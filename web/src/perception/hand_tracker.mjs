@@ -76,10 +76,9 @@ export class HandTracker {
   constructor(ort, palmSession, landmarkSession, { maxHands = 2, minPalmScore = 0.5, minPresence = 0.5, mirrored = false, detectGap = 0, detectBackoff = 0, lens = null,
     candidateScore = minPalmScore, candidatePresence = minPresence, maxCandidates = maxHands, palmPrefilter = 0, redetectOnLoss = false,
     motion = false, coast = 0 } = {}) {
-    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap, lens });
+    Object.assign(this, { ort, palmSession, landmarkSession, maxHands, minPalmScore, minPresence, mirrored, detectGap, detectBackoff, lens });
     Object.assign(this, { candidateScore, candidatePresence, maxCandidates, palmPrefilter, redetectOnLoss, motion, coast });
     this.framesWithoutDetect = 0;
-    this.detectBackoff = detectBackoff;
     this.gap = detectGap; // the current gap (detectGap, or backed off)
     for (const [s, what, n] of [[palmSession, 'palm', 2], [landmarkSession, 'landmark', 4]]) {
       if (s.inputNames.length !== 1 || s.outputNames.length !== n) {
