@@ -149,6 +149,16 @@ function setBusy(b) {
   document.body.dataset.busy = b ? '1' : '0';
 }
 
+/** A run that failed while starting: when it is still the current run, the worker cancels it and
+ *  the error is shown (an InputError's kind, else `kind`); false when another run replaced it. */
+function failRun(run, e, kind) {
+  if (app.run !== run) return false;
+  if (run.started) app.worker.postMessage({ type: 'cancel' });
+  finishRun();
+  showMessage(errorText(e instanceof InputError ? e.kind : kind, e.message));
+  return true;
+}
+
 function finishRun() {
   if (app.run) {
     app.run.finished = true; if (app.run.wake) app.run.wake(); clearTimeout(app.run.killTimer);
@@ -249,12 +259,7 @@ async function processVideo(url, name, sampleMeta = null) {
       app.worker.postMessage({ type: 'end' });
     }
   } catch (e) {
-    const kind = e instanceof InputError ? e.kind : 'video';
-    if (app.run === run) {
-      if (run.started) app.worker.postMessage({ type: 'cancel' });
-      finishRun();
-      showMessage(errorText(kind, e.message));
-    }
+    failRun(run, e, 'video');
   }
 }
 
@@ -310,14 +315,7 @@ async function startLive() {
     live.frames = new CameraFrames(ui.video, size.width, size.height, (f) => handOver(run, f));
     run.onCredit = () => live.frames.ask();
   } catch (e) {
-    const kind = e instanceof InputError ? e.kind : 'webcam';
-    if (app.run === run) {
-      if (run.started) app.worker.postMessage({ type: 'cancel' });
-      finishRun();
-      showMessage(errorText(kind, e.message));
-    } else {
-      endCapture(live);
-    }
+    if (!failRun(run, e, 'webcam')) endCapture(live);
   }
 }
 
