@@ -3,7 +3,8 @@
 // deploy/slurm/hawor_batch.sbatch over three clips (two `hawor synth` sequences, one truncated),
 // an element cancelled with scancel while its clip runs, then the array resubmitted: the clips'
 // outputs, the failure's message, the summary, and that finished clips are not run again.
-// Skipped with the reason when Slurm is not installed (scripts/install.sh installs it) or cannot
+// Skipped with the reason when Slurm is not installed (`bash tests/cluster/slurm_local.sh install`,
+// which the suite's cluster stage runs) or cannot
 // start here (slurm_local.sh exits 77), or the builds it needs are missing.
 
 import { test, before, after } from 'node:test';
@@ -27,7 +28,7 @@ let env = null;
 let skip = false;
 
 function skipReason() {
-  if (!['sbatch', 'slurmctld', 'slurmd', 'munged'].every(has)) return 'Slurm is not installed (scripts/install.sh installs slurmctld, slurmd, slurm-client and munge)';
+  if (!['sbatch', 'slurmctld', 'slurmd', 'munged'].every(has)) return 'Slurm is not installed (bash tests/cluster/slurm_local.sh install: slurmctld, slurmd, slurm-client and munge)';
   if (!existsSync(corePath)) return `${corePath} missing (cmake --build build/wasm --target hawor_core)`;
   if (!existsSync(haworBin)) return `${haworBin} missing (the native hawor CLI makes the clips)`;
   if (!['palm_detection_lite.onnx', 'hand_landmark_lite.onnx'].every((n) => existsSync(join(root, 'web/models', n)))) return 'web/models: the hand networks are missing (scripts/install.sh converts them)';
