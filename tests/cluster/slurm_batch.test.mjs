@@ -4,8 +4,8 @@
 // an element cancelled with scancel while its clip runs, then the array resubmitted: the clips'
 // outputs, the failure's message, the summary, and that finished clips are not run again.
 // Skipped with the reason when Slurm is not installed (`bash tests/cluster/slurm_local.sh install`,
-// which the suite's cluster stage runs) or cannot
-// start here (slurm_local.sh exits 77), or the builds it needs are missing.
+// which the suite's cluster stage runs), cannot start here (slurm_local.sh exits 77), or the
+// builds it needs are missing.
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
