@@ -9,6 +9,7 @@
 //
 //   node examples/bench_real_slam.mjs [--work DIR] [--inputs DIR] [--variants a,b] [--hawor BIN]
 //        [--core hawor_core.mjs] [--jobs N] [--json OUT] [--record-only] [--rerecord]
+//        [--runtime auto|native|wasm] (the networks' while recording, as `hawor run` takes it)
 //        [--playback forward|reverse|both] [--passes N] [-- extra hawor slam flags]
 //
 // --playback    reverse: each variant's recorded inputs in reverse order (the clip played
@@ -101,8 +102,10 @@ export function readOwnPng(buf) {
 }
 
 // ------------------------------------------------------------------------------------ recording
-/** Runs the pipeline on `file` with a core whose first MonoSlam records its inputs into dir. */
-async function record(file, dir) {
+/** Runs the pipeline on `file` with a core whose Pipeline records what its SLAM is given
+ *  (Pipeline.observeSlamInputs) into dir: the first pass only (the focal's further passes replay
+ *  the same frames inside finishCamera). */
+async function record(file, dir, runtimeName) {
   const cli = await import('../web/cli.mjs');
   const { runPipeline } = await import('../web/src/pipeline/run.mjs');
   rmSync(dir, { recursive: true, force: true });
@@ -110,42 +113,44 @@ async function record(file, dir) {
   mkdirSync(join(dir, 'masks'), { recursive: true });
   const core = await cli.loadCore(process.env.HAWOR_CORE);
   const meta = { intrinsics: null, options: null, frames: 0, masks: 0 };
-  let first = true;
-  const Base = core.MonoSlam;
-  // (embind classes cannot be extended: a constructor function that returns the patched instance)
-  function Recording(K, w, h, opts) {
-    const slam = new Base(K, w, h, opts);
-    if (!first) return slam;
-    first = false;
-    Object.assign(meta, { intrinsics: [...K], width: w, height: h, options: opts });
-    const proc = slam.process.bind(slam);
-    slam.process = (frame, mask) => {
+  const Base = core.Pipeline;
+  // (embind classes cannot be extended: a constructor function that returns the observed instance)
+  function Recording(opts, left, right) {
+    const pipeline = new Base(opts, left, right);
+    const ss = pipeline.slamSize();
+    // the SLAM's options as the core's Pipeline sets them (pipeline.hpp slamOptions)
+    const readout = opts.readout ?? 0;
+    const focalPriorSigma = opts.focalPriorSigma ?? (opts.userFocal ? 0.1 : 0.3);
+    Object.assign(meta, { intrinsics: [...ss.intrinsics], width: ss.width, height: ss.height,
+      options: { useMasks: true, refineFocal: opts.refineFocal ?? true, focalPriorSigma, rollingShutter: readout * (opts.fps ?? 30),
+        ...(opts.set ? { set: opts.set } : {}) } });
+    pipeline.observeSlamInputs((frame, w, h, c, mask) => {
       const name = `${String(meta.frames).padStart(6, '0')}.png`;
-      // grey at the SLAM's size; RGB(A) when the video already has it (the core makes it grey)
-      const c = frame.length / (meta.width * meta.height);
-      if (![1, 3, 4].includes(c)) throw new Error(`bench_real_slam: a ${frame.length}-byte SLAM frame at ${meta.width}x${meta.height}`);
-      writeFileSync(join(dir, 'frames', name), greyPng(frame, meta.width, meta.height, c));
-      if (mask) { writeFileSync(join(dir, 'masks', name), greyPng(mask, meta.width, meta.height)); meta.masks += 1; }
+      // grey at the SLAM's size; RGB(A) when the video already has it (the SLAM makes it grey)
+      if (w !== meta.width || h !== meta.height || ![1, 3, 4].includes(c)) throw new Error(`bench_real_slam: a ${w}x${h}x${c} SLAM frame, expected ${meta.width}x${meta.height}`);
+      writeFileSync(join(dir, 'frames', name), greyPng(frame, w, h, c));
+      if (mask) { writeFileSync(join(dir, 'masks', name), greyPng(mask, w, h)); meta.masks += 1; }
       meta.frames += 1;
-      return proc(frame, mask);
-    };
-    return slam;
+    });
+    return pipeline;
   }
-  const wrapped = new Proxy(core, { get: (t, k) => (k === 'MonoSlam' ? Recording : t[k]) });
+  const wrapped = new Proxy(core, { get: (t, k) => (k === 'Pipeline' ? Recording : t[k]) });
   const info = cli.probeVideo(file);
   const models = join(repo, 'web', 'models');
   const hm = cli.handModelFiles({});
-  const ort = await import('onnxruntime-web');
-  ort.env.wasm.numThreads = 2;
-  ort.env.logLevel = 'error';
+  // the networks on the runtime `hawor run --runtime` would pick (their decisions downstream can
+  // differ between runtimes: docs/benchmarks.md)
+  const { ort, runtime, sessionOptions } = await cli.loadOrt(runtimeName, 2);
   const source = { width: info.width, height: info.height, fps: info.fps, frameCount: info.frameCount,
     frames: cli.decodeFrames(file, info.width, info.height, null, 0, { decode: 0 }) };
   const result = await runPipeline(source, {
-    core: wrapped, ort, models: { palm: new Uint8Array(readFileSync(join(models, 'palm_detection_lite.onnx'))), landmark: new Uint8Array(readFileSync(join(models, 'hand_landmark_lite.onnx'))) },
+    core: wrapped, ort, sessionOptions, models: { palm: new Uint8Array(readFileSync(join(models, 'palm_detection_lite.onnx'))), landmark: new Uint8Array(readFileSync(join(models, 'hand_landmark_lite.onnx'))) },
     handModels: { left: new Uint8Array(readFileSync(hm.left)), right: new Uint8Array(readFileSync(hm.right)), leftName: hm.left, rightName: hm.right },
     refineFocal: true, modelKind: 'lite', threads: 2, groundScale: true,
   });
+  if (meta.frames === 0 || meta.frames !== result.frameCount) throw new Error(`bench_real_slam: ${file}: the SLAM was given ${meta.frames} of ${result.frameCount} frames (is the core's Pipeline the one observed?)`);
   meta.fps = info.fps;
+  meta.runtime = runtime;
   meta.pipelineCamera = { status: Array.from(result.camera.status) };
   writeFileSync(join(dir, 'slam.json'), JSON.stringify(meta));
   return meta;
@@ -274,7 +279,7 @@ const STATUS = { tracked: 0, interpolated: 1, lost: 2, relocalised: 3 };
 
 function parse(argv) {
   const o = { work: join(tmpdir(), 'hawor_bench_real'), inputs: join(tmpdir(), 'hawor_bench_real_slam'), variants: Object.keys(VARIANTS),
-    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), jobs: 1, extra: [], playback: 'forward' };
+    hawor: process.env.HAWOR_BIN ?? join(repo, 'build', 'native', 'examples', 'hawor'), jobs: 1, extra: [], playback: 'forward', runtime: 'auto' };
   const k = argv.indexOf('--');
   if (k >= 0) { o.extra = argv.slice(k + 1); argv = argv.slice(0, k); }
   for (let i = 0; i < argv.length; ++i) {
@@ -289,6 +294,7 @@ function parse(argv) {
     else if (a === '--json') o.json = v();
     else if (a === '--record-only') o.recordOnly = true;
     else if (a === '--rerecord') o.rerecord = true;
+    else if (a === '--runtime') { o.runtime = v(); if (!['auto', 'native', 'wasm'].includes(o.runtime)) throw new Error(`--runtime must be auto, native or wasm, not '${o.runtime}'`); }
     else if (a === '--passes') { o.passes = Number(v()); if (!Number.isInteger(o.passes) || o.passes < 2 || o.passes > 150) throw new Error(`--passes must be an integer from 2 to 150, not '${argv[i]}'`); }
     else if (a === '--playback') { o.playback = v(); if (!['forward', 'reverse', 'both'].includes(o.playback)) throw new Error(`--playback must be forward, reverse or both, not '${o.playback}'`); }
     else throw new Error(`unknown argument '${a}'`);
@@ -309,13 +315,14 @@ async function main(argv) {
   const n0 = 121;
   for (const n of o.variants) {
     const dir = join(o.inputs, n);
-    if (existsSync(join(dir, 'slam.json')) && !o.rerecord) continue;
+    // (a slam.json without intrinsics is an incomplete recording: recorded again)
+    if (existsSync(join(dir, 'slam.json')) && JSON.parse(readFileSync(join(dir, 'slam.json'), 'utf8')).intrinsics && !o.rerecord) continue;
     const file = VARIANTS[n].vf ? join(o.work, 'variants', `${n}.mp4`) : video;
     if (!existsSync(file)) throw new Error(`${file}: missing (node examples/bench_real.mjs --make-only)`);
     process.stderr.write(`bench_real_slam: recording the SLAM inputs of ${n}...\n`);
     const t0 = performance.now();
-    const m = await record(file, dir);
-    process.stderr.write(`bench_real_slam: ${n}: ${m.frames} frames ${m.width}x${m.height}, ${m.masks} masks (${((performance.now() - t0) / 1000).toFixed(0)} s)\n`);
+    const m = await record(file, dir, o.runtime);
+    process.stderr.write(`bench_real_slam: ${n}: ${m.frames} frames ${m.width}x${m.height}, ${m.masks} masks, networks on ${m.runtime} (${((performance.now() - t0) / 1000).toFixed(0)} s)\n`);
   }
   if (o.recordOnly) return 0;
   if (!existsSync(o.hawor)) throw new Error(`${o.hawor}: missing (cmake --build DIR --target hawor_cli)`);

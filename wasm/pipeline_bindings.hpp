@@ -9,6 +9,8 @@
 //       flow?: {maxSkip, maxCorners, minInliers, minInlierRatio, inlierShare, reach, goodError,
 //       badError, pyramidLevels, maskGrowth} (any subset) }   (pipeline/options.hpp, keypoint_flow.hpp)
 //     .slamSize() -> {width, height, intrinsics: [fx, fy, cx, cy]} (the SLAM's virtual camera)
+//     .observeSlamInputs(fn | null) fn(frame: Uint8Array, width, height, channels, mask:
+//           Uint8Array | null) with what the SLAM is given on each frame (copies; must not throw)
 //     .predict(frame) -> [{track, keypoints2d (42), keypoints3d (63) | null, pRight, inliers,
 //           trusted}] the last frame's hands carried to this one (pipeline/keypoint_flow.hpp;
 //           [] with the flow off); call before push() with the same frame
@@ -276,6 +278,20 @@ class Pipeline {
     });
   }
 
+  // observer(frame: Uint8Array, width, height, channels, mask: Uint8Array | null) with what the
+  // SLAM is given on each frame (copies); null stops it.
+  void observeSlamInputs(const val& observer) {
+    if (absent(observer)) {
+      p_.observeSlamInputs(nullptr);
+      return;
+    }
+    if (observer.typeOf().as<std::string>() != "function") throw hawor::Error("Pipeline.observeSlamInputs: a function or null");
+    p_.observeSlamInputs([observer](const hawor::ImageU8& f, const hawor::ImageU8* m) {
+      observer(toTyped(f.data.data(), f.data.size(), "Uint8Array"), f.width, f.height, f.channels,
+               m ? toTyped(m->data.data(), m->data.size(), "Uint8Array") : val::null());
+    });
+  }
+
   val push(const val& frame, const val& detections) {
     return guard("Pipeline.push", [&] {
       const hawor::ImageU8 im = frameFrom(frame, p_);
@@ -430,6 +446,7 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
       .constructor(&newPipeline, allow_raw_pointers())
       .function("slamSize", &Pipeline::slamSize)
       .function("predict", &Pipeline::predict)
+      .function("observeSlamInputs", &Pipeline::observeSlamInputs)
       .function("push", &Pipeline::push)
       .function("pushHands", &Pipeline::pushHands)
       .function("pushJoints", &Pipeline::pushJoints)

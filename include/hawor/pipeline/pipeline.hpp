@@ -34,6 +34,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -103,6 +104,13 @@ class Pipeline {
   const PipelineOptions<Scalar>& options() const { return opt_; }
   const PinholeCamera<Scalar>& slamCamera() const { return slamCam_; }
   int frames() const { return static_cast<int>(frames_.size()); }
+
+  /// Called with what the SLAM is given on each frame, just before it runs: the frame at the
+  /// SLAM's size (grey or rectified; the video's own RGB(A) where that is already the SLAM's
+  /// size) and the hand mask (null on a frame without hands). For recording and inspecting the
+  /// SLAM's inputs (examples/bench_real_slam.mjs replays them through `hawor slam`).
+  using SlamInputObserver = std::function<void(const ImageU8& frame, const ImageU8* mask)>;
+  void observeSlamInputs(SlamInputObserver observer) { slamInputObserver_ = std::move(observer); }
 
   /// The next frame's hands predicted from the last frame's by the keypoint flow
   /// (keypoint_flow.hpp), before the perception runs on it: those marked trusted may stand in
@@ -599,6 +607,7 @@ class Pipeline {
     }
     if (keepSlam_) keepForRerun(*slamFrame, slamMask);
     addTime("slamPrep", t0);
+    if (slamInputObserver_) slamInputObserver_(*slamFrame, slamMask);
     t0 = Clock::now();
     const SlamStatus st = slam_->process(*slamFrame, slamMask);
     addTime("slam", t0);
@@ -762,6 +771,7 @@ class Pipeline {
   PinholeCamera<Scalar> slamCam_;
   std::unique_ptr<RectifyMap<Scalar>> rectify_;
   std::unique_ptr<MonoSlam<Scalar>> slam_;
+  SlamInputObserver slamInputObserver_;
   SlamResult<Scalar> slam_result_;
   SideState<Scalar> sideState_;
   std::vector<Observed> frames_;
