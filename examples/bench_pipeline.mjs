@@ -5,6 +5,7 @@
 //        [--seeds 3] [--frames 90] [--size 640x480] [--mode network,simulated] [--model lite|full]
 //        [--threads 2] [--noise-px 2] [--noise-mm 5] [--fov DEG] [--work DIR] [--json FILE]
 //        [--focal-factor 1[,0.7,1.3]] [--refine-focal on[,off]] [--hand-smooth 0[,3,7]] [--mask-dilate PX]
+//        [--mask-hold S[,S2]]
 //        [--tracker JSON] [--capture clean,phone,...] [--readout] [--flow-max-skip 0[,3]]
 //
 // Per sequence: `hawor synth` (the licence-free default hand; frames encoded to H.264 at CRF 12
@@ -35,6 +36,8 @@
 // profile's rolling-shutter readout (capture.json's readout_s; runPipeline's options.readout). Each row also has handDepth per hand: the median ratio of the fitted
 // camera-frame wrist depth to the true one, its spread and the frame-to-frame jitter (mm) of the
 // fitted and the true depth (what the hand-anchored scale has to work with).
+// --mask-hold S,S2: runPipeline's maskHoldSeconds (a hand no longer found stays masked from the
+// SLAM at its last pose this long; 0: off), one row per value, labelled 'hold S s'.
 // --flow-max-skip N: runPipeline's flow.maxSkip (the keypoint flow stands in for the landmark
 // network on up to N frames in a row); the table's flow column: N (landmark runs / flow hands);
 // --flow '{"minInliers":6}': the flow's other options.
@@ -79,6 +82,7 @@ function parse(argv) {
     else if (a === '--capture') o.captures = v().split(',');
     else if (a === '--readout') o.readout = true;
     else if (a === '--hand-smooth') o.handSmooth = v().split(',').map(Number);
+    else if (a === '--mask-hold') o.maskHold = v().split(',').map(Number);
     else if (a === '--flow-max-skip') o.flowMaxSkip = v().split(',').map(Number);
     else if (a === '--flow') o.flow = JSON.parse(v());
     else if (a === '--focal-factor') o.focalFactors = v().split(',').map(Number);
@@ -275,13 +279,14 @@ async function main() {
       const gt = core.readNpz(new Uint8Array(readFileSync(join(seq.dir, 'hands_gt.npz'))), 'hands_gt.npz');
       const gtCam = readTumPositions(join(seq.dir, 'camera_gt.tum'));
       const info = probeVideo(join(seq.dir, 'video.mp4'));
-      for (const mode of o.modes) for (const factor of o.focalFactors ?? [null]) for (const refine of o.refineFocal ?? [true]) for (const smooth of o.handSmooth ?? [0]) for (const flow of o.flowMaxSkip ?? [null]) {
+      for (const mode of o.modes) for (const factor of o.focalFactors ?? [null]) for (const refine of o.refineFocal ?? [true]) for (const smooth of o.handSmooth ?? [0]) for (const flow of o.flowMaxSkip ?? [null]) for (const hold of o.maskHold ?? [null]) {
         const timing = { decode: 0 };
         const source = { width: info.width, height: info.height, fps: seq.fps, frameCount: info.frameCount,
           frames: decodeFrames(join(seq.dir, 'video.mp4'), info.width, info.height, null, 0, timing) };
         // the generator's world is the first camera's: the output in that frame too
         const options = { core, ort, models, handModels, modelKind: o.model, threads: o.threads, gravityAligned: false,
           refineFocal: refine, handScaleSmooth: smooth, ...(o.maskDilate !== undefined ? { maskDilatePx: o.maskDilate } : {}),
+          ...(hold !== null ? { maskHoldSeconds: hold } : {}),
           ...(o.tracker ? { tracker: o.tracker } : {}), ...(flow !== null || o.flow ? { flow: { ...(o.flow ?? {}), ...(flow !== null ? { maxSkip: flow } : {}) } } : {}),
           ...(seq.lens !== 'pinhole' ? { camera: seq.lens } : {}),
           ...(o.readout ? { readout: seq.readout } : {}),
@@ -295,7 +300,7 @@ async function main() {
         const T = result.frameCount;
         const hands = ['left', 'right'].map((s) => ev.perHand[s]).filter((h) => h.metrics);
         const row = {
-          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}${o.readout && seq.readout > 0 ? ` (readout ${1000 * seq.readout} ms)` : ''}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth, flowMaxSkip: flow,
+          sequence: `${preset}/${seed}${capture === 'none' ? '' : ` ${capture}`}${o.readout && seq.readout > 0 ? ` (readout ${1000 * seq.readout} ms)` : ''}${hold !== null ? ` hold ${hold} s` : ''}`, mode, frames: T, focalFactor: factor, refine, handSmooth: smooth, flowMaxSkip: flow,
           landmarkRuns: result.stats.landmarkRuns, flowHands: result.stats.flowHands,
           focalGuess: result.intrinsics.guessFx, focalOut: result.intrinsics.fx, focalTrue: fxVideo, focalRefined: result.intrinsics.refined,
           focalStd: result.intrinsics.focalStd, focalEstimate: result.intrinsics.focalEstimateFx, focalReason: result.intrinsics.focalReason,

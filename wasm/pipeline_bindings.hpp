@@ -3,7 +3,7 @@
 //
 //   new Pipeline(options, leftModel: HandModel, rightModel: HandModel), options {
 //       intrinsics [fx, fy, cx, cy] (the video's), width, height, lens?, fps?, readout?,
-//       slamMaxSide?, maskDilatePx?, refineFocal?, focalPriorSigma?, userFocal?, focalMaxPasses?,
+//       slamMaxSide?, maskDilatePx?, maskHoldSeconds?, refineFocal?, focalPriorSigma?, userFocal?, focalMaxPasses?,
 //       focalRerunBytes?, set? (SlamOptions "NAME=VALUE,..."), infill? ('spline'|'lerp'|'last'),
 //       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks?, gravityAligned?,
 //       flow?: {maxSkip, maxCorners, minInliers, minInlierRatio, inlierShare, reach, goodError,
@@ -211,6 +211,7 @@ hawor::PipelineOptions<double> optionsFrom(const val& o) {
   num("readout", p.readout);
   integer("slamMaxSide", p.slamMaxSide);
   integer("maskDilatePx", p.maskDilatePx);
+  num("maskHoldSeconds", p.maskHoldSeconds);
   flag("refineFocal", p.refineFocal);
   num("focalPriorSigma", p.focalPriorSigma);
   flag("userFocal", p.userFocal);

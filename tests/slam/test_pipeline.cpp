@@ -311,6 +311,58 @@ TEST_CASE("pipeline: detections fitted, sides kept, masks for the SLAM (hands_co
   }
 }
 
+TEST_CASE("pipeline: a hand no longer found stays masked from the SLAM at its last pose for maskHoldSeconds", "[pipeline]") {
+  // hands given on frames 0-9, none after: the SLAM's masks (observeSlamInputs) against the
+  // renderer's own hand labels of frame 9
+  const int given = 10, frames = 30;
+  const hs::SynthOptions so = slam_test::sequenceOptions(frames);
+  hs::SynthSequence<double> seq(hs::findSynthPreset("table_work"), 1, leftHand(), rightHand(), so);
+  for (const double holdSeconds : {0.5, 0.0}) {
+    hawor::PipelineOptions<double> po;
+    po.camera = seq.camera();
+    po.userFocal = true;
+    po.refineFocal = false;
+    po.maskHoldSeconds = holdSeconds;
+    hawor::Pipeline<double> p(po, leftHand(), rightHand());
+    REQUIRE(p.slamCamera().width == seq.camera().width);  // the renderer's labels at the SLAM's size
+    std::vector<hawor::ImageU8> masks;
+    p.observeSlamInputs([&](const hawor::ImageU8&, const hawor::ImageU8* m) { masks.push_back(m ? *m : hawor::ImageU8()); });
+    hs::SynthFrame<double> fr;
+    hawor::ImageU8 lastLabels;
+    for (int i = 0; i < frames; ++i) {
+      seq.renderFrame(i, fr);
+      std::array<const hawor::HandPose<double>*, 2> hands{nullptr, nullptr};
+      for (int s = 0; s < 2 && i < given; ++s) {
+        if (fr.hands[s].valid) hands[s] = &fr.hands[s].camera;
+      }
+      if (i == given - 1) {
+        REQUIRE((hands[0] || hands[1]));
+        lastLabels = fr.images.mask;
+      }
+      p.pushHands(fr.images.rgb, hands);
+    }
+    REQUIRE(masks.size() == static_cast<std::size_t>(frames));
+    const int hold = static_cast<int>(std::lround(holdSeconds * po.fps));  // 15 frames at 30 fps
+    INFO("hold " << holdSeconds << " s = " << hold << " frames");
+    for (int i = 0; i < frames; ++i) {
+      const hawor::ImageU8& m = masks[static_cast<std::size_t>(i)];
+      const bool expect = i < given + hold;
+      INFO("frame " << i);
+      CHECK(!m.data.empty() == expect);
+      if (i < given || !expect || m.data.empty()) continue;
+      // held: every pixel of the hands' true silhouette on their last frame stays masked
+      std::size_t labelled = 0, covered = 0;
+      for (std::size_t k = 0; k < lastLabels.data.size(); ++k) {
+        if (!lastLabels.data[k]) continue;
+        ++labelled;
+        covered += m.data[k] ? 1 : 0;
+      }
+      REQUIRE(labelled > 100);
+      CHECK(covered >= labelled * 99 / 100);
+    }
+  }
+}
+
 TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]") {
   hawor::PipelineOptions<double> po;
   po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;

@@ -26,6 +26,9 @@ struct PipelineOptions {
   // --- SLAM ---
   int slamMaxSide = 640;                 ///< the SLAM and the hand masks run at this long side
   int maskDilatePx = 2;                  ///< hand masks grown by this many pixels (SLAM resolution)
+  /// A hand the perception stops finding stays masked from the SLAM at its last fitted pose for
+  /// this long (seconds; 0: off): a hand that vanishes was more often missed than gone.
+  Scalar maskHoldSeconds = Scalar(0.5);
   bool refineFocal = true;               ///< the SLAM's final bundle adjustment refines the focal
   /// Std of log(f / guess) of the focal prior; NaN: 0.1 for a focal the user gave, else 0.3 (a
   /// field-of-view guess).
@@ -65,6 +68,7 @@ struct PipelineOptions {
     }
     if (slamMaxSide < 16) throw Error("pipeline: slamMaxSide must be >= 16");
     if (maskDilatePx < 0 || maskDilatePx > 64) throw Error("pipeline: maskDilatePx must be in [0, 64]");
+    if (!(maskHoldSeconds >= Scalar(0) && maskHoldSeconds <= Scalar(10))) throw Error("pipeline: maskHoldSeconds must be in [0, 10] s");
     if (!std::isnan(double(focalPriorSigma)) && !(focalPriorSigma > Scalar(0))) throw Error("pipeline: focalPriorSigma must be > 0");
     if (focalMaxPasses < 1) throw Error("pipeline: focalMaxPasses must be >= 1");
     if (!(minHandDepth >= Scalar(0) && maxHandDepth > minHandDepth)) throw Error("pipeline: need 0 <= minHandDepth < maxHandDepth");

@@ -556,34 +556,53 @@ class Pipeline {
     greyFor_ = index;
   }
 
-  /// Masks, the SLAM's frame and the SLAM on the current frame.
-  SlamStatus trackFrame(const ImageU8& image) {
-    Observed& f = frames_.back();
-    auto t0 = Clock::now();
-    std::vector<HandMaskHand<Scalar>> hands;
-    for (int s = 0; s < 2; ++s) {
-      if (!f.side[s].fitted) continue;
-      HandMaskHand<Scalar> h;
-      h.model = models_[s];
-      h.pose = f.side[s].pose;
-      hands.push_back(std::move(h));
-    }
+  /// The hand mask the SLAM gets on the current frame (empty: no hand; docs/design.md §5). Each
+  /// hand fitted on this frame: its silhouette grown by maskDilatePx. One the keypoint flow
+  /// carried: grown further by the flow's error, flow.maskGrowth × its size (fingers that moved
+  /// since the network's last run stay masked). A hand fitted within the last maskHoldSeconds but
+  /// not on this frame: held at its last pose and grown the same way. A hand that vanishes was
+  /// more often missed (compressed, blurred, low-resolution video) than gone, and the features on
+  /// it, moving with it, would steer the camera.
+  Mask handMask() const {
+    const int T = frames();
+    const int hold = static_cast<int>(std::lround(opt_.maskHoldSeconds * opt_.fps));
+    const Scalar toSlam = Scalar(slamCam_.width) / Scalar(opt_.camera.width);
     Mask mask;
-    if (!hands.empty()) renderHandMasks(hands, slamCam_, opt_.maskDilatePx, mask);
-    // A hand whose keypoints the flow carried (its articulation held from an earlier frame) is
-    // masked wider, by the flow's expected error: fingers that moved since stay masked.
     for (int s = 0; s < 2; ++s) {
-      const Side& o = f.side[s];
-      if (!o.fitted || !o.byFlow) continue;
-      const int grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * keypointExtent(o.keypoints2d) * Scalar(slamCam_.width) / Scalar(opt_.camera.width)));
-      if (grow <= 0) continue;
+      int age = 0;
+      while (age <= hold && age < T && !frames_[static_cast<std::size_t>(T - 1 - age)].side[s].fitted) ++age;
+      if (age > hold || age >= T) continue;
+      const Side& o = frames_[static_cast<std::size_t>(T - 1 - age)].side[s];
+      int grow = 0;
+      if (o.byFlow || age > 0) grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * finiteExtent(o.keypoints2d) * toSlam));
       HandMaskHand<Scalar> h;
       h.model = models_[s];
       h.pose = o.pose;
-      Mask wide;
-      renderHandMasks(std::vector<HandMaskHand<Scalar>>{h}, slamCam_, std::min(64, opt_.maskDilatePx + grow), wide);
-      for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = std::max(mask.data[i], wide.data[i]);
+      Mask one;
+      renderHandMasks(std::vector<HandMaskHand<Scalar>>{h}, slamCam_, std::min(64, opt_.maskDilatePx + grow), one);
+      if (mask.data.empty()) {
+        mask = std::move(one);
+      } else {
+        for (std::size_t i = 0; i < mask.data.size(); ++i) mask.data[i] = std::max(mask.data[i], one.data[i]);
+      }
     }
+    return mask;
+  }
+
+  /// keypointExtent over the finite rows (a given hand's keypoints behind the camera are NaN).
+  static Scalar finiteExtent(const Pixels<Scalar>& kp) {
+    Scalar x0 = std::numeric_limits<Scalar>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    for (Eigen::Index k = 0; k < kp.rows(); ++k) {
+      if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
+      x0 = std::min(x0, kp(k, 0)), x1 = std::max(x1, kp(k, 0)), y0 = std::min(y0, kp(k, 1)), y1 = std::max(y1, kp(k, 1));
+    }
+    return x1 >= x0 ? std::max(x1 - x0, y1 - y0) : Scalar(0);
+  }
+
+  /// Masks, the SLAM's frame and the SLAM on the current frame.
+  SlamStatus trackFrame(const ImageU8& image) {
+    auto t0 = Clock::now();
+    Mask mask = handMask();
     if (opt_.depthMasks) depthMasks_.push_back(mask);
     addTime("masks", t0);
     t0 = Clock::now();

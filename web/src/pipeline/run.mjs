@@ -84,6 +84,8 @@
 //                                        model is fitted to them), one kind per frame; replaces
 //                                        perception and fit (`hawor world` natively)
 //           infill? ('spline' | 'lerp' | 'last'), maskDilatePx? (2, at the SLAM resolution),
+//                                        maskHoldSeconds? (0.5: a hand no longer found stays masked
+//                                        from the SLAM at its last pose this long),
 //           detectGap? (1)               while one hand is tracked, the palm detector looks for
 //                                        the other only every detectGap+1 frames
 //           flow? ({})                   the keypoint flow's options over the core's defaults
@@ -383,6 +385,7 @@ export async function runPipeline(source, options, hooks = {}) {
       ...(options.focalPriorSigma !== undefined ? { focalPriorSigma: options.focalPriorSigma } : {}),
       ...(options.slamMaxSide !== undefined ? { slamMaxSide: options.slamMaxSide } : {}),
       ...(options.maskDilatePx !== undefined ? { maskDilatePx: options.maskDilatePx } : {}),
+      ...(options.maskHoldSeconds !== undefined ? { maskHoldSeconds: options.maskHoldSeconds } : {}),
       ...(options.focalMaxPasses !== undefined ? { focalMaxPasses: options.focalMaxPasses } : {}),
       ...(options.focalRerunBytes !== undefined ? { focalRerunBytes: options.focalRerunBytes } : {}),
       ...(options.handScaleSmooth !== undefined ? { handScaleSmooth: options.handScaleSmooth } : {}),
