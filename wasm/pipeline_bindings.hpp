@@ -18,6 +18,9 @@
 //           detections: [{keypoints2d (42), keypoints3d (63) | null, pRight, track (-1: none),
 //           flow (a prediction standing in for the network)}])
 //       -> {slamStatus, detection: Int32Array(2) (index per side, -1 none), valid: Uint8Array(2)}
+//     .pushDeferred(frame, detections) -> push()'s, slamStatus null: the SLAM step waits for
+//       .trackPending() -> {slamStatus}, which must come before the next frame (between them
+//       predict() may run on the next frame: its perception can overlap this frame's SLAM)
 //     .pushHands(frame, {left: pose | null, right: pose | null}) -> the same (camera-frame hands
 //       from another regressor; pose objects as HandModel.forward takes)
 //     .pushJoints(frame, {left: joints (63) | null, right: ...}) -> the same (camera-frame 3D
@@ -301,6 +304,23 @@ class Pipeline {
     });
   }
 
+  val pushDeferred(const val& frame, const val& detections) {
+    return guard("Pipeline.pushDeferred", [&] {
+      const hawor::ImageU8 im = frameFrom(frame, p_);
+      val o = info(p_.pushDeferred(im, detectionsFrom(detections)));
+      o.set("slamStatus", val::null());  // trackPending()'s
+      return o;
+    });
+  }
+
+  val trackPending() {
+    return guard("Pipeline.trackPending", [&] {
+      val o = val::object();
+      o.set("slamStatus", static_cast<int>(p_.trackPending()));
+      return o;
+    });
+  }
+
   val pushHands(const val& frame, const val& hands) {
     return guard("Pipeline.pushHands", [&] {
       const hawor::ImageU8 im = frameFrom(frame, p_);
@@ -449,6 +469,8 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
       .function("predict", &Pipeline::predict)
       .function("observeSlamInputs", &Pipeline::observeSlamInputs)
       .function("push", &Pipeline::push)
+      .function("pushDeferred", &Pipeline::pushDeferred)
+      .function("trackPending", &Pipeline::trackPending)
       .function("pushHands", &Pipeline::pushHands)
       .function("pushJoints", &Pipeline::pushJoints)
       .function("stampFrame", &Pipeline::stampFrame)

@@ -6,7 +6,7 @@
 //        [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N]
 //        [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last]
 //        [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N]
-//        [--runtime auto|native|wasm]
+//        [--runtime auto|native|wasm] [--perception thread|main]
 //   hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [run options]
 //   hawor batch --summary DIR [--json]
 //   (`hawor` is the npm package's bin; in a checkout: node web/cli.mjs ...)
@@ -32,6 +32,11 @@
 //
 // --runtime: the networks' runtime (loadOrt): native = onnxruntime-node, wasm = onnxruntime-web
 // (the browser's), auto (default) = native when installed. The summary line names it.
+// --perception: where the hand networks run: main (default) = on the pipeline's own thread;
+// thread = a worker thread (src/perception/worker_tracker.mjs), the next frame's networks
+// overlapping this frame's SLAM and the decoding. The same result either way. On two cores the
+// process is CPU-bound and both take the same time (docs/experiments.md); the overlap needs cores
+// to spare.
 //
 // Defaults: the core from $HAWOR_CORE, else build/wasm/wasm (checkout) or dist/ (installed
 // package), found by src/core.mjs's builtFile, which also finds the sample (build/web or dist/);
@@ -52,12 +57,13 @@ import { runPipeline, cameraIntrinsics, MAX_PIXELS } from './src/pipeline/run.mj
 import { eyeHeightError } from './src/pipeline/eye_height.mjs';
 import { canonicalOptions, runTask, taskSlot } from './src/batch/task.mjs';
 import { formatSummary, summarize } from './src/batch/summary.mjs';
+import { workerTrackerFactory } from './src/perception/worker_tracker.mjs';
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '..');
 const defaultModels = join(here, 'models');
-const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N] [--runtime auto|native|wasm]';
+const USAGE = 'usage: hawor run VIDEO|--sample --out DIR [--focal PX | --fov DEG] [--camera pinhole|opencv:k1,k2,p1,p2[,k3]|fisheye:k1,k2,k3,k4] [--readout S] [--no-refine-focal] [--mano DIR] [--depth-model M.onnx [--depth-config M.json]] [--model full|lite] [--threads N] [--core hawor_core.mjs] [--models DIR] [--max-frames N] [--infill spline|lerp|last] [--eye-height M | --no-ground-scale] [--first-camera-world] [--flow-max-skip N] [--runtime auto|native|wasm] [--perception thread|main]';
 
 const BATCH_USAGE = 'usage: hawor batch MANIFEST|FOLDER --out DIR [--task-index N --tasks M] [--force] [--clip-timeout S] [hawor run options]\n       hawor batch --summary DIR [--json]\n(the task index defaults to SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX; clip i goes to task i mod M)';
 const usage = (msg) => Object.assign(new Error(`${msg}\n${USAGE}`), { exitCode: 2 });
@@ -99,6 +105,7 @@ export function parseArgs(argv) {
     else if (a === '--eye-height') { o.eyeHeight = num(next(), '--eye-height', 0); const bad = eyeHeightError(o.eyeHeight); if (bad) throw usage(`--eye-height: ${bad}`); }
     else if (a === '--no-ground-scale') o.groundScale = false;
     else if (a === '--first-camera-world') o.gravityAligned = false;
+    else if (a === '--perception') { o.perception = next(); if (!['thread', 'main'].includes(o.perception)) throw usage(`--perception must be thread or main, not '${o.perception}'`); }
     else if (a === '--runtime') { o.runtime = next(); if (!['auto', 'native', 'wasm'].includes(o.runtime)) throw usage(`--runtime must be auto, native or wasm, not '${o.runtime}'`); }
     else if (a === '--flow-max-skip') { o.flowMaxSkip = num(next(), '--flow-max-skip', -1); if (!Number.isInteger(o.flowMaxSkip) || o.flowMaxSkip > 30) throw usage('--flow-max-skip must be an integer from 0 to 30'); }
     else if (a === '--help' || a === '-h') return { help: true };
@@ -416,12 +423,17 @@ export async function main(argv) {
   const source = { width, height, fps: info.fps, frameCount: Number.isFinite(total) ? total : null,
     frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming) };
   const cpu0 = process.cpuUsage();
+  const networks = { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) };
+  const trackerFactory = o.perception === 'thread'
+    ? workerTrackerFactory({ runtime, sessionOptions, threads: o.threads, ...networks, corePath: o.core ?? process.env.HAWOR_CORE }) : undefined;
+  const tRun = performance.now();
   const result = await runPipeline(source, {
-    core, ort, sessionOptions, models: { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) },
+    core, ort, sessionOptions, models: networks, trackerFactory,
     handModels, focalPx: o.focalPx, fovDeg: o.fovDeg, camera: o.camera, readout: o.readout, refineFocal: o.refineFocal ?? true, modelKind: o.model, depthModel, threads: o.threads, infill: o.infill,
     groundScale: o.groundScale ?? true, eyeHeight: o.eyeHeight, gravityAligned: o.gravityAligned ?? true, ...(o.flowMaxSkip !== undefined ? { flow: { maxSkip: o.flowMaxSkip } } : {}),
   }, { onProgress: progressBar(source.frameCount) });
   const cpu = process.cpuUsage(cpu0);
+  const pipelineLoadMs = result.timings.load;
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
   if (scaleTo) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
   const tw = performance.now();
@@ -432,8 +444,11 @@ export async function main(argv) {
   result.timings.write = performance.now() - tw;
   writeFileSync(join(o.out, 'result.json'), resultToJson(result));
   const T = result.frameCount;
+  // the wall time of decoding, processing and writing (the stages overlap with --perception thread:
+  // their sum is more)
+  const wallMs = performance.now() - tRun - pipelineLoadMs;
   const cpuMsPerFrame = (cpu.user + cpu.system) / 1000 / T;
-  process.stderr.write(`${timingTable(result.timings, T)}\nCPU time of this process (all its threads, model loading included): ${cpuMsPerFrame.toFixed(1)} ms per frame\n`);
+  process.stderr.write(`${timingTable(result.timings, T)}\n${'wall'.padEnd(14)} ${wallMs.toFixed(0).padStart(8)}   ${(wallMs / T).toFixed(1).padStart(8)}   (without load; the stages overlap)\nCPU time of this process (all its threads, model loading included): ${cpuMsPerFrame.toFixed(1)} ms per frame\n`);
   for (const w of result.warnings) process.stderr.write(`hawor: warning: ${w}\n`);
   const count = (a) => Array.from(a).reduce((s, v) => s + (v ? 1 : 0), 0);
   const summary = {
@@ -442,7 +457,7 @@ export async function main(argv) {
     focalRefined: result.intrinsics.refined, focalGuess: result.intrinsics.guessFx,
     noHands: result.noHands, leftFrames: count(result.hands.left.valid), rightFrames: count(result.hands.right.valid),
     scale: result.scale.scale, scaleMethod: result.scale.method, slamInitialised: result.slam.initialised,
-    runtime, msPerFrame: Number((Object.entries(result.timings).filter(([k]) => k !== 'load').reduce((a, [, v]) => a + v, 0) / T).toFixed(1)),
+    runtime, perception: o.perception ?? 'main', msPerFrame: Number((wallMs / T).toFixed(1)),
     cpuMsPerFrame: Number(cpuMsPerFrame.toFixed(1)),
   };
   process.stdout.write(`${JSON.stringify(summary)}\n`);

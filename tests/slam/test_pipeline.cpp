@@ -363,6 +363,61 @@ TEST_CASE("pipeline: a hand no longer found stays masked from the SLAM at its la
   }
 }
 
+TEST_CASE("pipeline: pushDeferred + trackPending, with the next frame's predict() between them, give push()'s result exactly", "[pipeline]") {
+  const int frames = 30;
+  const hs::SynthOptions so = slam_test::sequenceOptions(frames);
+  hs::SynthSequence<double> seq(hs::findSynthPreset("hands_cover"), 2, leftHand(), rightHand(), so);
+  hawor::PipelineOptions<double> po;
+  po.camera = seq.camera();
+  po.userFocal = true;
+  hawor::Pipeline<double> a(po, leftHand(), rightHand()), b(po, leftHand(), rightHand());
+  hs::SynthFrame<double> fr;
+  std::vector<hawor::ImageU8> images;
+  std::vector<std::vector<hawor::HandDetection<double>>> dets;
+  for (int i = 0; i < frames; ++i) {
+    seq.renderFrame(i, fr);
+    images.push_back(fr.images.rgb);
+    dets.emplace_back();
+    for (int s = 0; s < 2; ++s) {
+      const auto& h = fr.hands[s];
+      if (!h.valid) continue;
+      hawor::HandDetection<double> d;
+      d.keypoints2d.resize(21, 2);
+      for (int k = 0; k < 21; ++k) d.keypoints2d.row(k) = seq.camera().project(V3(h.jointsCam.row(k).transpose())).transpose();
+      d.pRight = s == 1 ? 0.9 : 0.1;
+      d.track = s + 1;  // the flow follows tracks
+      dets.back().push_back(d);
+    }
+  }
+  int flowTrusted = 0;
+  for (int i = 0; i < frames; ++i) {
+    a.predict(images[static_cast<std::size_t>(i)]);
+    a.push(images[static_cast<std::size_t>(i)], dets[static_cast<std::size_t>(i)]);
+  }
+  b.predict(images[0]);
+  for (int i = 0; i < frames; ++i) {
+    b.pushDeferred(images[static_cast<std::size_t>(i)], dets[static_cast<std::size_t>(i)]);
+    if (i == 0) {
+      CHECK_THROWS_WITH(b.push(images[1], {}), Catch::Contains("trackPending() must follow"));
+      CHECK_THROWS_WITH(b.finishCamera(), Catch::Contains("trackPending() must follow"));
+    }
+    // the next frame's prediction (its perception would run now) before this frame's SLAM
+    if (i + 1 < frames) {
+      for (const auto& p : b.predict(images[static_cast<std::size_t>(i + 1)])) flowTrusted += p.trusted ? 1 : 0;
+    }
+    b.trackPending();
+  }
+  CHECK_THROWS_WITH(b.trackPending(), Catch::Contains("without a frame"));
+  CHECK(flowTrusted > 0);  // the flow ran and its grey frame was the next frame's
+  const hawor::PipelineResult<double> ra = a.finish(), rb = b.finish();
+  REQUIRE(ra.cameraPoses.size() == rb.cameraPoses.size());
+  for (std::size_t t = 0; t < ra.cameraPoses.size(); ++t) {
+    CHECK((ra.cameraPoses[t].matrix() - rb.cameraPoses[t].matrix()).cwiseAbs().maxCoeff() == 0.0);
+  }
+  for (int s = 0; s < 2; ++s) CHECK((ra.hands[s].jointsWorld.array() == rb.hands[s].jointsWorld.array() || (ra.hands[s].jointsWorld.array().isNaN() && rb.hands[s].jointsWorld.array().isNaN())).all());
+  CHECK(ra.scale == rb.scale);
+}
+
 TEST_CASE("pipeline: bad input is refused with a message naming it", "[pipeline]") {
   hawor::PipelineOptions<double> po;
   po.camera.fx = po.camera.fy = 500, po.camera.cx = 319.5, po.camera.cy = 239.5, po.camera.width = 640, po.camera.height = 480;

@@ -28,7 +28,7 @@
 //                      a canvas already holding the frame (the RGB -> canvas copy is not timed).
 //   hawor-node         unless --no-cli: `node web/cli.mjs run FRAMES.mkv --out TMP --threads T
 //                      --model M` (HAWOR_HAND_DIR = the same WebXR hands), its printed msPerFrame
-//                      (all stages but load, decode included, / frames) and stage table.
+//                      ((wall - load) / frames, decoding and writing included) and stage table.
 // Per-frame statistics (median, nearest-rank p95, mean; hands found per frame) skip the first
 // --warmup frames (default 5); the summary takes the median over the runs of each figure, and
 // the ratio hawor-browser / mediapipe-browser of the medians (and of the means). Each run also
@@ -377,7 +377,7 @@ function runCli(o, decoded, tmp, k, timeoutS, handDir) {
       const stages = {};
       for (const l of stderr.split('\n')) {
         const mm = /^(\w+)\s+(\d+)\s+([\d.]+)\s/.exec(l);
-        if (mm && mm[1] !== 'total' && mm[1] !== 'stage') stages[mm[1]] = Number(mm[3]);
+        if (mm && !['total', 'wall', 'stage'].includes(mm[1])) stages[mm[1]] = Number(mm[3]);
       }
       rmSync(out, { recursive: true, force: true });
       res({ args: ['node', 'web/cli.mjs', ...args.slice(1)], summary, stagesMsPerFrame: stages });
@@ -522,7 +522,7 @@ function table(r) {
     ...rows.map(([n, m, p, a, h, per]) => `${n.padEnd(19)}${String(m).padStart(16)}${String(p).padStart(8)}${String(a).padStart(8)}${String(h).padStart(13)}   ${per}`),
     `ratio hawor-browser / mediapipe-browser: ${s.ratio} of the medians, ${s.meanRatio} of the means (hawor's perception stage alone: ${s.hawor.perceptionMsPerFrame} ms/frame, ${s.perceptionRatio}x)`,
     `hawor-browser: (wall - load) / frames ${s.hawor.wallNoLoadPerFrameMs} ms (the CLI's msPerFrame's measure), finishing stages ${s.hawor.finishMs} ms after the last frame`
-      + (s.cli ? `; hawor-node msPerFrame is (all stages but load) / frames, its per-frame stages ${s.cli.perFrameStagesMs} ms` : ''),
+      + (s.cli ? `; hawor-node msPerFrame is (wall - load) / frames, its per-frame stages ${s.cli.perFrameStagesMs} ms` : ''),
     '',
   ];
   return lines.join('\n');

@@ -23,6 +23,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -107,10 +108,16 @@ bool fitSimilarity2(const std::vector<std::complex<Scalar>>& z, const std::vecto
   return std::isfinite(out.a.real()) && std::isfinite(out.a.imag()) && std::isfinite(out.b.real()) && std::isfinite(out.b.imag());
 }
 
-/// A hand's size in pixels: the larger side of its keypoints' bounding box.
+/// A hand's size in pixels: the larger side of its keypoints' bounding box (over the finite rows:
+/// a given hand's keypoints behind the camera are NaN; 0 without any).
 template <typename Scalar>
 Scalar keypointExtent(const Pixels<Scalar>& kp) {
-  return std::max(kp.col(0).maxCoeff() - kp.col(0).minCoeff(), kp.col(1).maxCoeff() - kp.col(1).minCoeff());
+  Scalar x0 = std::numeric_limits<Scalar>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (Eigen::Index k = 0; k < kp.rows(); ++k) {
+    if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
+    x0 = std::min(x0, kp(k, 0)), x1 = std::max(x1, kp(k, 0)), y0 = std::min(y0, kp(k, 1)), y1 = std::max(y1, kp(k, 1));
+  }
+  return x1 >= x0 ? std::max(x1 - x0, y1 - y0) : Scalar(0);
 }
 
 template <typename Scalar>

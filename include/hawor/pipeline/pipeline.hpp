@@ -119,7 +119,7 @@ class Pipeline {
   const std::vector<KeypointPrediction<Scalar>>& predict(const ImageU8& image) {
     static const std::vector<KeypointPrediction<Scalar>> none;
     if (!flow_.enabled()) return none;
-    checkFrame(image);
+    checkFrame(image, true);
     const auto t0 = Clock::now();
     const int index = frames();
     const bool slamGrey = image.channels == 1 && image.width == slamCam_.width && image.height == slamCam_.height;
@@ -134,33 +134,35 @@ class Pipeline {
   /// A frame with the perception's detections. `image`: the video frame (the options' size; grey,
   /// RGB or RGBA) or its grey plane at the SLAM's size.
   FrameInfo push(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
-    checkFrame(image);
-    for (std::size_t i = 0; i < detections.size(); ++i) checkDetection(detections[i], i);
-    if (predictedFor_ == frames()) flow_.observe(detections);
-    frames_.emplace_back();
-    const auto t0 = Clock::now();
-    const std::array<int, 2> sides = assignSides(detections, sideState_, reach());
-    updateSideState(sideState_, detections, sides);
-    FrameInfo info;
-    info.detection = sides;
-    Observed& f = frames_.back();
-    for (int s = 0; s < 2; ++s) {
-      if (sides[s] < 0) {
-        havePrevious_[s] = false;
-        continue;
-      }
-      const HandDetection<Scalar>& d = detections[static_cast<std::size_t>(sides[s])];
-      Side& o = f.side[s];
-      o.detected = true;
-      o.keypoints2d = d.keypoints2d;
-      o.byFlow = d.flow;
-      o.keypoints3d = d.keypoints3d;
-      o.fitted = fitSide(s, o, opt_.camera, true);
-      info.valid[s] = o.fitted;
-    }
-    addTime("fit", t0);
+    FrameInfo info = observe(image, detections);
     info.slamStatus = trackFrame(image);
     return info;
+  }
+
+  /// push() in two steps, so that the perception of the next frame can run (elsewhere: a worker)
+  /// while this one's SLAM does: pushDeferred() assigns the sides and fits the hands (what
+  /// predict() on the next frame needs) and keeps the SLAM's input; trackPending() then runs the
+  /// masks and the SLAM on it, before the next push. The result is push()'s exactly.
+  FrameInfo pushDeferred(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
+    FrameInfo info = observe(image, detections);
+    // the SLAM's input as trackFrame would make it: the grey frame at the SLAM's size (predict()'s
+    // of the next frame overwrites grey_), or the frame itself at that size
+    const bool atSlamSize = image.width == slamCam_.width && image.height == slamCam_.height;
+    if (!atSlamSize || (withLens_ && image.channels != 1)) {
+      if (greyFor_ != frames() - 1) makeGrey(image, frames() - 1);
+      pending_ = grey_;
+    } else {
+      pending_ = image;
+    }
+    hasPending_ = true;
+    return info;
+  }
+
+  /// The SLAM step of the frame pushDeferred() took (see there).
+  SlamStatus trackPending() {
+    if (!hasPending_) throw Error("pipeline: trackPending() without a frame from pushDeferred()");
+    hasPending_ = false;
+    return trackFrame(pending_);
   }
 
   /// A frame with camera-frame hands from another regressor (null: that side not seen); they are
@@ -272,64 +274,17 @@ class Pipeline {
   /// of the frames so far (the tracker's poses and map, the fitted hands; no depth network), as
   /// finish() computes them from the refined ones. Until a cue gives a scale: the SLAM's units
   /// (method "none") in the first camera's frame. Costs a scale estimate: call every second or so.
-  const LiveWorld<Scalar>& updateLiveWorld() {
-    if (cameraDone_) throw Error("pipeline: updateLiveWorld() after finishCamera()");
-    const auto t0 = Clock::now();
-    LiveWorld<Scalar> w;
-    w.frames = frames();
-    std::vector<SE3<Scalar>> poses;
-    for (int f = 0; f < slam_->numFrames(); ++f) poses.push_back(slam_->livePose(f));
-    const std::vector<Vec3<Scalar>> points = opt_.groundScale ? slam_->liveMapPoints() : std::vector<Vec3<Scalar>>();
-    const std::vector<HandTrack<Scalar>> wrists = wristTracks();
-    if (poses.size() >= 2 && (!wrists.empty() || !points.empty())) {
-      MetricScaleOptions<Scalar> mo;
-      mo.setFps(timelineFps());
-      mo.ground.eyeHeight = opt_.eyeHeight;
-      try {
-        const MetricScaleResult<Scalar> r = estimateMetricScale({}, poses, wrists, mo, &points);
-        if (r.fused.ok() && std::isfinite(double(r.fused.scale)) && r.fused.scale > Scalar(0)) {
-          w.scale = r.fused.scale;
-          w.scaleMethod = r.fused.method;
-          w.scaleConfidence = r.fused.confidence;
-          if (opt_.gravityAligned) {
-            std::vector<SE3<Scalar>> metric;
-            for (const SE3<Scalar>& P : poses) metric.emplace_back(P.rotation(), Vec3<Scalar>(w.scale * P.translation()));
-            w.world = gravityAlignedWorld(metric, r.groundRan ? &r.ground : nullptr, w.scale);
-          }
-        }
-      } catch (const std::exception&) {
-        // too little of the clip yet (a cue's own checks): stay in the SLAM's units
-      }
-    }
-    live_ = std::move(w);
-    addTime("liveWorld", t0);
-    return live_;
-  }
+  /// (pipeline/live.hpp)
+  const LiveWorld<Scalar>& updateLiveWorld();
 
   /// The last pushed frame in the live world (updateLiveWorld's latest; causal estimates).
-  LiveFrame<Scalar> live() const {
-    LiveFrame<Scalar> l;
-    const int f = frames() - 1;
-    if (f < 0 || slam_->numFrames() != frames()) return l;
-    l.frame = f;
-    l.posed = slam_->livePosed(f);
-    l.scale = live_.scale;
-    const SE3<Scalar> P = slam_->livePose(f);
-    l.cameraPose = live_.world.fromFirstCamera * SE3<Scalar>(P.rotation(), Vec3<Scalar>(live_.scale * P.translation()));
-    for (int s = 0; s < 2; ++s) {
-      const Side& o = frames_.back().side[s];
-      l.valid[s] = o.fitted;
-      if (!o.fitted) continue;
-      l.joints[s].resize(kKeypoints, 3);
-      for (int k = 0; k < kKeypoints; ++k) l.joints[s].row(k) = (l.cameraPose * Vec3<Scalar>(o.keypoints.row(k).transpose())).transpose();
-    }
-    return l;
-  }
+  LiveFrame<Scalar> live() const;
 
   /// The SLAM's finishing passes, the further passes with a refined focal, and the hands fitted
   /// again with it. Call once, after the last frame.
   const SlamResult<Scalar>& finishCamera() {
     if (cameraDone_) throw Error("pipeline: finishCamera() called twice");
+    if (hasPending_) throw Error("pipeline: trackPending() must follow pushDeferred() before finishCamera()");
     if (frames_.empty()) throw Error("pipeline: the video has no frames");
     cameraDone_ = true;
     auto t0 = Clock::now();
@@ -472,8 +427,9 @@ class Pipeline {
   }
 
   /// Throws for a frame that is neither the video's nor the SLAM's grey one (nothing is kept).
-  void checkFrame(const ImageU8& image) const {
+  void checkFrame(const ImageU8& image, bool allowPending = false) const {
     if (cameraDone_) throw Error("pipeline: push() after finish");
+    if (hasPending_ && !allowPending) throw Error("pipeline: trackPending() must follow pushDeferred() before the next frame");
     const int T = static_cast<int>(frames_.size());
     if (!image.consistent() || image.width <= 0 || image.height <= 0) throw Error("pipeline: frame " + std::to_string(T) + " is empty");
     const bool video = image.width == opt_.camera.width && image.height == opt_.camera.height &&
@@ -556,6 +512,36 @@ class Pipeline {
     greyFor_ = index;
   }
 
+  /// push() up to the SLAM: the sides, the fits, the keypoint flow's observation.
+  FrameInfo observe(const ImageU8& image, const std::vector<HandDetection<Scalar>>& detections) {
+    checkFrame(image);
+    for (std::size_t i = 0; i < detections.size(); ++i) checkDetection(detections[i], i);
+    if (predictedFor_ == frames()) flow_.observe(detections);
+    frames_.emplace_back();
+    const auto t0 = Clock::now();
+    const std::array<int, 2> sides = assignSides(detections, sideState_, reach());
+    updateSideState(sideState_, detections, sides);
+    FrameInfo info;
+    info.detection = sides;
+    Observed& f = frames_.back();
+    for (int s = 0; s < 2; ++s) {
+      if (sides[s] < 0) {
+        havePrevious_[s] = false;
+        continue;
+      }
+      const HandDetection<Scalar>& d = detections[static_cast<std::size_t>(sides[s])];
+      Side& o = f.side[s];
+      o.detected = true;
+      o.keypoints2d = d.keypoints2d;
+      o.byFlow = d.flow;
+      o.keypoints3d = d.keypoints3d;
+      o.fitted = fitSide(s, o, opt_.camera, true);
+      info.valid[s] = o.fitted;
+    }
+    addTime("fit", t0);
+    return info;
+  }
+
   /// The hand mask the SLAM gets on the current frame (empty: no hand; docs/design.md §5). Each
   /// hand fitted on this frame: its silhouette grown by maskDilatePx. One the keypoint flow
   /// carried: grown further by the flow's error, flow.maskGrowth × its size (fingers that moved
@@ -574,7 +560,7 @@ class Pipeline {
       if (age > hold || age >= T) continue;
       const Side& o = frames_[static_cast<std::size_t>(T - 1 - age)].side[s];
       int grow = 0;
-      if (o.byFlow || age > 0) grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * finiteExtent(o.keypoints2d) * toSlam));
+      if (o.byFlow || age > 0) grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * keypointExtent(o.keypoints2d) * toSlam));
       HandMaskHand<Scalar> h;
       h.model = models_[s];
       h.pose = o.pose;
@@ -587,16 +573,6 @@ class Pipeline {
       }
     }
     return mask;
-  }
-
-  /// keypointExtent over the finite rows (a given hand's keypoints behind the camera are NaN).
-  static Scalar finiteExtent(const Pixels<Scalar>& kp) {
-    Scalar x0 = std::numeric_limits<Scalar>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-    for (Eigen::Index k = 0; k < kp.rows(); ++k) {
-      if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
-      x0 = std::min(x0, kp(k, 0)), x1 = std::max(x1, kp(k, 0)), y0 = std::min(y0, kp(k, 1)), y1 = std::max(y1, kp(k, 1));
-    }
-    return x1 >= x0 ? std::max(x1 - x0, y1 - y0) : Scalar(0);
   }
 
   /// Masks, the SLAM's frame and the SLAM on the current frame.
@@ -799,6 +775,8 @@ class Pipeline {
   std::size_t keptBytes_ = 0;
   std::vector<ImageU8> keptFrames_, keptMasks_;
   ImageU8 grey_, rectified_, rectMask_;
+  ImageU8 pending_;  ///< pushDeferred()'s SLAM input
+  bool hasPending_ = false;
   int greyFor_ = -1, predictedFor_ = -1;  ///< the frame grey_ holds and the one predict() saw
   LiveWorld<Scalar> live_;
   std::vector<Scalar> times_;  ///< stampFrame's, per frame
@@ -811,3 +789,6 @@ class Pipeline {
 };
 
 }  // namespace hawor
+
+// Member functions in their own header.
+#include "hawor/pipeline/live.hpp"

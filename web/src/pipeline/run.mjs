@@ -97,6 +97,13 @@
 //           minPresence? (0.3)           the landmark network's hand presence to keep a hand
 //                                        (MediaPipe's 0.5 drops the wearer's hand gripping a
 //                                        plate on the kitchen clip; tests/web/kitchen_hands)
+//           trackerFactory?              async (trackerOptions, lens | null) => a hand tracker run
+//                                        elsewhere: { track(image, predictions) -> hands, stats,
+//                                        close() } as HandTracker's (node:
+//                                        perception/worker_tracker.mjs, a worker thread, so that the
+//                                        networks of frame t+1 overlap the SLAM of frame t); lens:
+//                                        { intrinsics, width, height, lens } for its crops; ort and
+//                                        models are then unused
 //           tracker? ({})                further HandTracker options over
 //                                        PIPELINE_TRACKER_OPTIONS (experiments)
 //           groundScale? (true)          the ground cue of the metric scale: the cameras' height
@@ -323,6 +330,7 @@ export async function runPipeline(source, options, hooks = {}) {
   const K = [intr.fx, intr.fy, intr.cx, intr.cy];
 
   const owned = []; // embind objects to delete (in reverse: the pipeline before its models)
+  let frames = null; // the source's iterator (closed on the way out: an error stops the decoder)
   let tracker = null;
   let depthModel = null;
   try {
@@ -355,12 +363,19 @@ export async function runPipeline(source, options, hooks = {}) {
     }
     if (!options.observations && !options.handsCam) {
       const ort = options.ort;
-      if (!ort || !ort.InferenceSession) throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
       const m = options.models ?? {};
       const detectGap = options.detectGap ?? PIPELINE_DETECT_GAP;
       const minPresence = options.minPresence ?? PIPELINE_MIN_PRESENCE;
       const policy = { ...PIPELINE_TRACKER_OPTIONS, ...(options.live ? PIPELINE_LIVE_TRACKER_OPTIONS : {}), ...(options.tracker ?? {}) };
-      if (m.palmSession && m.landmarkSession) {
+      if (options.trackerFactory) {
+        // the tracker elsewhere (a worker thread), with this policy; through a lens it builds its
+        // own crops from the camera
+        tracker = await options.trackerFactory({ maxHands: 2, detectGap, minPresence, ...policy },
+          lens !== 'pinhole' ? { intrinsics: Array.from(K), width, height, lens } : null);
+        if (typeof tracker.close === 'function') owned.push({ delete: () => tracker.close() });
+      } else if (!ort || !ort.InferenceSession) {
+        throw new Error('runPipeline: options.ort (the onnxruntime-web namespace) is required');
+      } else if (m.palmSession && m.landmarkSession) {
         tracker = new HandTracker(ort, m.palmSession, m.landmarkSession, { maxHands: 2, detectGap, minPresence, ...policy, lens: lensCrops });
       } else {
         if (!(m.palm instanceof Uint8Array) || !(m.landmark instanceof Uint8Array)) {
@@ -401,13 +416,48 @@ export async function runPipeline(source, options, hooks = {}) {
     if (rectifier) owned.push(rectifier);
     let T = 0;
 
-    for await (const frame of source.frames) {
+    // With the tracker elsewhere (options.trackerFactory: a worker), a frame's SLAM step
+    // (Pipeline.pushDeferred, then trackPending) runs while the next frame's perception does;
+    // otherwise, and live (each frame reported at once), it follows its own frame's push.
+    const overlap = !!options.trackerFactory && !options.live;
+    let pending = null;
+    const finishFrame = (p) => {
+      const ts = now();
+      p.info.slamStatus = pipeline.trackPending().slamStatus;
+      if (options.live) liveInfo(p.info, p.T);
+      p.info.ms = p.ms + (now() - ts);
+      if (onFrame) onFrame(p.info);
+      if (onProgress) onProgress({ stage: 'frames', done: p.T + 1, total: source.frameCount ?? null });
+      return now() - ts;
+    };
+    const liveInfo = (info, t) => {
+      const every = options.liveWorldEvery ?? Math.max(1, Math.round(fps));
+      if ((t + 1) % every === 0) {
+        // the frame in the world before the update too: a live display carries what it drew
+        // into the updated world (the same frame's camera in both worlds gives the change)
+        const before = pipeline.live();
+        info.world = pipeline.updateLiveWorld();
+        info.world.previous = { frame: before.frame, scale: before.scale, cameraRotation: before.cameraRotation, cameraPosition: before.cameraPosition };
+      }
+      info.live = pipeline.live();
+    };
+
+    // the frames pulled by hand: with the overlap the next frame is requested while this one's
+    // perception runs elsewhere, so its decoding (ffmpeg's pipe) fills that wait too
+    frames = source.frames[Symbol.asyncIterator] ? source.frames[Symbol.asyncIterator]() : source.frames[Symbol.iterator]();
+    let next = frames.next();
+    for (;;) {
+      const got = await next;
+      if (got.done) break;
+      const frame = got.value;
+      next = null;
       checkAbort(signal);
       const tf = now();
       const rgba = frame && frame.rgba;
       if (!(rgba instanceof Uint8Array || rgba instanceof Uint8ClampedArray)) throw new Error(`frame ${T}: rgba must be a Uint8Array`);
       const c = rgba.length / (width * height);
       if (c !== 3 && c !== 4) throw new Error(`frame ${T}: ${rgba.length} bytes, expected ${width}x${height}x4 (RGBA) or x3 (RGB)`);
+      if (frame.time !== undefined && typeof frame.time !== 'number') throw new Error(`frame ${T}: time must be a number of seconds`);
       if (keptRgb) {
         const rgb = ss.width === width && ss.height === height && c === 3 ? rgba.slice() : core.downscaleImage(rgba, width, height, c, ss.width, ss.height, false);
         keptRgb.push(rectifier ? rectifier.image(rgb, 3) : rgb);
@@ -423,41 +473,36 @@ export async function runPipeline(source, options, hooks = {}) {
           : pipeline.pushHands(rgba, { left, right });
         info.slamStatus = r.slamStatus;
         ['left', 'right'].forEach((side, s) => { if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s] }); });
+        if (frame.time !== undefined) pipeline.stampFrame(frame.time);
+        if (options.live) liveInfo(info, T);
+        info.ms = now() - tf;
+        if (onFrame) onFrame(info);
+        if (onProgress) onProgress({ stage: 'frames', done: T + 1, total: source.frameCount ?? null });
       } else {
-        // --- perception ---
+        // --- perception of this frame, the last frame's SLAM step meanwhile ---
         const t1 = now();
         const predictions = options.observations ? null : pipeline.predict(rgba);
-        const dets = options.observations ? ((await options.observations(T)) ?? []) : await tracker.track({ width, height, data: rgba, channels: c }, predictions);
-        addTime('perception', now() - t1);
-        // --- sides, fit, masks, SLAM ---
+        const perceived = options.observations ? options.observations(T) : tracker.track({ width, height, data: rgba, channels: c }, predictions);
+        if (overlap) next = frames.next();
+        const slamMs = pending ? finishFrame(pending) : 0;
+        const dets = (await perceived) ?? [];
+        addTime('perception', now() - t1 - slamMs);
+        // --- sides and fit now, masks and SLAM with the next frame's perception ---
         const input = toDetections(dets);
-        const r = pipeline.push(rgba, input);
-        info.slamStatus = r.slamStatus;
+        const r = pipeline.pushDeferred(rgba, input);
         ['left', 'right'].forEach((side, s) => {
           if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s], keypoints2d: input[r.detection[s]].keypoints2d });
         });
-      }
-      if (frame.time !== undefined) {
         // a source that drops frames gives their capture times (the timeline, the hand cues' rate)
-        if (typeof frame.time !== 'number') throw new Error(`frame ${T}: time must be a number of seconds`);
-        pipeline.stampFrame(frame.time);
-      }
-      if (options.live) {
-        const every = options.liveWorldEvery ?? Math.max(1, Math.round(fps));
-        if ((T + 1) % every === 0) {
-          // the frame in the world before the update too: a live display carries what it drew
-          // into the updated world (the same frame's camera in both worlds gives the change)
-          const before = pipeline.live();
-          info.world = pipeline.updateLiveWorld();
-          info.world.previous = { frame: before.frame, scale: before.scale, cameraRotation: before.cameraRotation, cameraPosition: before.cameraPosition };
-        }
-        info.live = pipeline.live();
+        if (frame.time !== undefined) pipeline.stampFrame(frame.time);
+        pending = { info, T, ms: now() - tf - slamMs };
+        // overlap only pays with the tracker elsewhere, and live each frame is shown at once
+        if (!overlap) { finishFrame(pending); pending = null; }
       }
       T += 1;
-      info.ms = now() - tf;
-      if (onFrame) onFrame(info);
-      if (onProgress) onProgress({ stage: 'frames', done: T, total: source.frameCount ?? null });
+      next ??= frames.next();
     }
+    if (pending) finishFrame(pending);
     if (T === 0) throw new Error('the video has no frames');
     checkAbort(signal);
 
@@ -522,6 +567,7 @@ export async function runPipeline(source, options, hooks = {}) {
     };
   } finally {
     for (const o of owned.reverse()) { try { o.delete(); } catch { /* already freed */ } }
+    if (frames && typeof frames.return === 'function') { try { await frames.return(); } catch { /* the source's own error */ } }
   }
 }
 
