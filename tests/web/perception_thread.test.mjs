@@ -1,7 +1,8 @@
 // The hand networks in a worker thread (web/src/perception/worker_tracker.mjs, the CLI's
 // `--perception thread`): the same result as on the pipeline's own thread (`--perception main`,
 // the default), every value of result.json but the timings; a worker that cannot start
-// (networks that do not load) is an error naming it; the option is checked.
+// (networks that do not load) is an error naming it; the option is checked, and batch's rerun
+// check ignores it.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -12,6 +13,7 @@ import { join } from 'node:path';
 import { root, clipPath, clipSkipReason, modelsSkipReason } from './mediapipe_support.mjs';
 import { parseArgs } from '../../web/cli.mjs';
 import { workerTrackerFactory } from '../../web/src/perception/worker_tracker.mjs';
+import { canonicalOptions } from '../../web/src/batch/task.mjs';
 
 const corePath = process.env.HAWOR_CORE ?? join(root, 'build/wasm/wasm/hawor_core.mjs');
 const coreSkip = () => (existsSync(corePath) ? false : `${corePath} missing (cmake --build build/wasm --target hawor_core)`);
@@ -42,7 +44,10 @@ test('a perception worker that cannot load its networks fails with a message, no
   await assert.rejects(factory({ maxHands: 2 }, null), /the perception worker failed to start/);
 });
 
-test('--perception takes thread or main', () => {
+test('--perception takes thread or main, and a batch rerun does not count it as another option', () => {
   assert.equal(parseArgs(['run', 'v.mp4', '--out', 'o', '--perception', 'main']).perception, 'main');
+  const opts = (where) => canonicalOptions(parseArgs(['run', 'v.mp4', '--out', 'o', '--threads', '1', '--perception', where]));
+  assert.deepEqual(opts('thread'), opts('main'));
+  assert.equal(opts('main').threads, 1);
   assert.throws(() => parseArgs(['run', 'v.mp4', '--out', 'o', '--perception', 'gpu']), /--perception must be thread or main, not 'gpu'/);
 });

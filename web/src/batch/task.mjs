@@ -55,10 +55,10 @@ export function taskSlot(given, env = process.env) {
   return warning ? { index, tasks, from, warning } : { index, tasks, from };
 }
 
-/** The run options as compared between runs: the parsed `hawor run` options without the video
- *  and the output folder, keys sorted. */
+/** The run options as compared between runs: the parsed `hawor run` options without the video,
+ *  the output folder and where the networks run (--perception: the same result), keys sorted. */
 export function canonicalOptions(parsed) {
-  const { video, out, ...rest } = parsed;
+  const { video, out, perception, ...rest } = parsed;
   return Object.fromEntries(Object.entries(rest).sort(([a], [b]) => (a < b ? -1 : 1)));
 }
 
