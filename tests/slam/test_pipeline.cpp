@@ -311,49 +311,57 @@ TEST_CASE("pipeline: detections fitted, sides kept, masks for the SLAM (hands_co
   }
 }
 
-TEST_CASE("pipeline: a hand no longer found stays masked from the SLAM at its last pose for maskHoldSeconds", "[pipeline]") {
-  // hands given on frames 0-9, none after: the SLAM's masks (observeSlamInputs) against the
-  // renderer's own hand labels of frame 9
+TEST_CASE("pipeline: a still hand no longer found stays masked from the SLAM at its last pose for maskHoldSeconds, a moving one not", "[pipeline]") {
+  // the hands of frame 9 given on frames 0-9 (still, or moving 2 cm a frame sideways), none
+  // after: the SLAM's masks (observeSlamInputs) against the renderer's own hand labels of frame 9
   const int given = 10, frames = 30;
   const hs::SynthOptions so = slam_test::sequenceOptions(frames);
   hs::SynthSequence<double> seq(hs::findSynthPreset("table_work"), 1, leftHand(), rightHand(), so);
-  for (const double holdSeconds : {0.5, 0.0}) {
+  hs::SynthFrame<double> last;
+  seq.renderFrame(given - 1, last);
+  REQUIRE((last.hands[0].valid || last.hands[1].valid));
+  struct Case { double holdSeconds, speed; int heldFrames; };
+  // still: held 15 frames (0.5 s at 30 fps); off: none; 2 cm a frame (~20 px at this focal, the
+  // hands ~100-200 px): a few frames at most
+  for (const Case c : {Case{0.5, 0.0, 15}, Case{0.0, 0.0, 0}, Case{0.5, 0.02, -1}}) {
     hawor::PipelineOptions<double> po;
     po.camera = seq.camera();
     po.userFocal = true;
     po.refineFocal = false;
-    po.maskHoldSeconds = holdSeconds;
+    po.maskHoldSeconds = c.holdSeconds;
     hawor::Pipeline<double> p(po, leftHand(), rightHand());
     REQUIRE(p.slamCamera().width == seq.camera().width);  // the renderer's labels at the SLAM's size
     std::vector<hawor::ImageU8> masks;
     p.observeSlamInputs([&](const hawor::ImageU8&, const hawor::ImageU8* m) { masks.push_back(m ? *m : hawor::ImageU8()); });
     hs::SynthFrame<double> fr;
-    hawor::ImageU8 lastLabels;
     for (int i = 0; i < frames; ++i) {
       seq.renderFrame(i, fr);
+      std::array<hawor::HandPose<double>, 2> pose{last.hands[0].camera, last.hands[1].camera};
       std::array<const hawor::HandPose<double>*, 2> hands{nullptr, nullptr};
       for (int s = 0; s < 2 && i < given; ++s) {
-        if (fr.hands[s].valid) hands[s] = &fr.hands[s].camera;
-      }
-      if (i == given - 1) {
-        REQUIRE((hands[0] || hands[1]));
-        lastLabels = fr.images.mask;
+        if (!last.hands[s].valid) continue;
+        pose[static_cast<std::size_t>(s)].trans(0) += c.speed * (i - (given - 1));  // at frame 9's pose on frame 9
+        hands[static_cast<std::size_t>(s)] = &pose[static_cast<std::size_t>(s)];
       }
       p.pushHands(fr.images.rgb, hands);
     }
     REQUIRE(masks.size() == static_cast<std::size_t>(frames));
-    const int hold = static_cast<int>(std::lround(holdSeconds * po.fps));  // 15 frames at 30 fps
-    INFO("hold " << holdSeconds << " s = " << hold << " frames");
-    for (int i = 0; i < frames; ++i) {
+    INFO("hold " << c.holdSeconds << " s, hands moving " << c.speed << " m a frame");
+    int held = 0;
+    for (int i = given; i < frames && !masks[static_cast<std::size_t>(i)].data.empty(); ++i) ++held;
+    for (int i = given + held; i < frames; ++i) CHECK(masks[static_cast<std::size_t>(i)].data.empty());  // not again
+    for (int i = 0; i < given; ++i) CHECK(!masks[static_cast<std::size_t>(i)].data.empty());
+    if (c.heldFrames >= 0) {
+      CHECK(held == c.heldFrames);
+    } else {
+      CHECK(held <= 4);
+    }
+    // held: every pixel of the hands' true silhouette on their last frame stays masked
+    for (int i = given; i < given + held && c.speed == 0; ++i) {
       const hawor::ImageU8& m = masks[static_cast<std::size_t>(i)];
-      const bool expect = i < given + hold;
-      INFO("frame " << i);
-      CHECK(!m.data.empty() == expect);
-      if (i < given || !expect || m.data.empty()) continue;
-      // held: every pixel of the hands' true silhouette on their last frame stays masked
       std::size_t labelled = 0, covered = 0;
-      for (std::size_t k = 0; k < lastLabels.data.size(); ++k) {
-        if (!lastLabels.data[k]) continue;
+      for (std::size_t k = 0; k < last.images.mask.data.size(); ++k) {
+        if (!last.images.mask.data[k]) continue;
         ++labelled;
         covered += m.data[k] ? 1 : 0;
       }

@@ -546,9 +546,10 @@ class Pipeline {
   /// hand fitted on this frame: its silhouette grown by maskDilatePx. One the keypoint flow
   /// carried: grown further by the flow's error, flow.maskGrowth × its size (fingers that moved
   /// since the network's last run stay masked). A hand fitted within the last maskHoldSeconds but
-  /// not on this frame: held at its last pose and grown the same way. A hand that vanishes was
-  /// more often missed (compressed, blurred, low-resolution video) than gone, and the features on
-  /// it, moving with it, would steer the camera.
+  /// not on this frame, and slow enough to be still under it (stillCovered): held at its last
+  /// pose and grown the same way. A hand that vanishes was more often missed (compressed,
+  /// blurred, low-resolution video) than gone, and the features on it, moving with it, would
+  /// steer the camera.
   Mask handMask() const {
     const int T = frames();
     const int hold = static_cast<int>(std::lround(opt_.maskHoldSeconds * opt_.fps));
@@ -559,6 +560,7 @@ class Pipeline {
       while (age <= hold && age < T && !frames_[static_cast<std::size_t>(T - 1 - age)].side[s].fitted) ++age;
       if (age > hold || age >= T) continue;
       const Side& o = frames_[static_cast<std::size_t>(T - 1 - age)].side[s];
+      if (age > 0 && !stillCovered(s, T - 1 - age, age)) continue;
       int grow = 0;
       if (o.byFlow || age > 0) grow = static_cast<int>(std::lround(opt_.flow.maskGrowth * keypointExtent(o.keypoints2d) * toSlam));
       HandMaskHand<Scalar> h;
@@ -573,6 +575,33 @@ class Pipeline {
       }
     }
     return mask;
+  }
+
+  /// Whether side s, last fitted on frame f, would still lie under its held silhouette `age`
+  /// frames later: at its image speed before f (its keypoints' centre, from the fit before within
+  /// 3 frames) it has moved less than half its size. A still hand missed by the perception stays
+  /// masked for the whole hold; a moving one (or one seen once) is not held where it no longer is.
+  bool stillCovered(int s, int f, int age) const {
+    const Side& last = frames_[static_cast<std::size_t>(f)].side[s];
+    for (int g = f - 1; g >= std::max(0, f - 3); --g) {
+      const Side& before = frames_[static_cast<std::size_t>(g)].side[s];
+      if (!before.fitted) continue;
+      const Scalar speed = (keypointCentre(last.keypoints2d) - keypointCentre(before.keypoints2d)).norm() / Scalar(f - g);
+      return std::isfinite(double(speed)) && Scalar(age) * speed <= Scalar(0.5) * keypointExtent(last.keypoints2d);
+    }
+    return false;
+  }
+
+  /// The mean of the finite rows of a hand's keypoints (pixels).
+  static Vec2<Scalar> keypointCentre(const Pixels<Scalar>& kp) {
+    Vec2<Scalar> c = Vec2<Scalar>::Zero();
+    int n = 0;
+    for (Eigen::Index k = 0; k < kp.rows(); ++k) {
+      if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
+      c += kp.row(k).transpose();
+      ++n;
+    }
+    return n > 0 ? Vec2<Scalar>(c / Scalar(n)) : Vec2<Scalar>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
   }
 
   /// Masks, the SLAM's frame and the SLAM on the current frame.
