@@ -118,12 +118,7 @@ async function record(file, dir, runtimeName) {
   function Recording(opts, left, right) {
     const pipeline = new Base(opts, left, right);
     const ss = pipeline.slamSize();
-    // the SLAM's options as the core's Pipeline sets them (pipeline.hpp slamOptions)
-    const readout = opts.readout ?? 0;
-    const focalPriorSigma = opts.focalPriorSigma ?? (opts.userFocal ? 0.1 : 0.3);
-    Object.assign(meta, { intrinsics: [...ss.intrinsics], width: ss.width, height: ss.height,
-      options: { useMasks: true, refineFocal: opts.refineFocal ?? true, focalPriorSigma, rollingShutter: readout * (opts.fps ?? 30),
-        ...(opts.set ? { set: opts.set } : {}) } });
+    Object.assign(meta, { intrinsics: [...ss.intrinsics], width: ss.width, height: ss.height, options: pipeline.slamOptions() });
     pipeline.observeSlamInputs((frame, w, h, c, mask) => {
       const name = `${String(meta.frames).padStart(6, '0')}.png`;
       // grey at the SLAM's size; RGB(A) when the video already has it (the SLAM makes it grey)

@@ -9,6 +9,8 @@
 //       flow?: {maxSkip, maxCorners, minInliers, minInlierRatio, inlierShare, reach, goodError,
 //       badError, pyramidLevels, maskGrowth} (any subset) }   (pipeline/options.hpp, keypoint_flow.hpp)
 //     .slamSize() -> {width, height, intrinsics: [fx, fy, cx, cy]} (the SLAM's virtual camera)
+//     .slamOptions() -> {useMasks, refineFocal, focalPriorSigma, rollingShutter, set?} the SLAM's,
+//           as new MonoSlam takes them
 //     .observeSlamInputs(fn | null) fn(frame: Uint8Array, width, height, channels, mask:
 //           Uint8Array | null) with what the SLAM is given on each frame (copies; must not throw)
 //     .predict(frame) -> [{track, keypoints2d (42), keypoints3d (63) | null, pRight, inliers,
@@ -282,6 +284,18 @@ class Pipeline {
     });
   }
 
+  // the SLAM's options as MonoSlam's constructor takes them (its first pass)
+  val slamOptions() const {
+    const hawor::SlamOptions<double> s = p_.slamOptions();
+    val o = val::object();
+    o.set("useMasks", s.useMasks);
+    o.set("refineFocal", s.finish.refineFocal);
+    o.set("focalPriorSigma", s.focal.priorSigmaLog);
+    o.set("rollingShutter", s.rollingShutter);
+    if (!p_.options().slamSet.empty()) o.set("set", p_.options().slamSet);
+    return o;
+  }
+
   // observer(frame: Uint8Array, width, height, channels, mask: Uint8Array | null) with what the
   // SLAM is given on each frame (copies); null stops it.
   void observeSlamInputs(const val& observer) {
@@ -467,6 +481,7 @@ EMSCRIPTEN_BINDINGS(hawor_pipeline) {
       .constructor(&newPipeline, allow_raw_pointers())
       .function("slamSize", &Pipeline::slamSize)
       .function("predict", &Pipeline::predict)
+      .function("slamOptions", &Pipeline::slamOptions)
       .function("observeSlamInputs", &Pipeline::observeSlamInputs)
       .function("push", &Pipeline::push)
       .function("pushDeferred", &Pipeline::pushDeferred)

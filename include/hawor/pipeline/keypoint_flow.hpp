@@ -120,6 +120,19 @@ Scalar keypointExtent(const Pixels<Scalar>& kp) {
   return x1 >= x0 ? std::max(x1 - x0, y1 - y0) : Scalar(0);
 }
 
+/// The mean of a hand's finite keypoints (pixels; NaN without any).
+template <typename Scalar>
+Vec2<Scalar> keypointCentre(const Pixels<Scalar>& kp) {
+  Vec2<Scalar> c = Vec2<Scalar>::Zero();
+  int n = 0;
+  for (Eigen::Index k = 0; k < kp.rows(); ++k) {
+    if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
+    c += kp.row(k).transpose();
+    ++n;
+  }
+  return n > 0 ? Vec2<Scalar>(c / Scalar(n)) : Vec2<Scalar>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+}
+
 template <typename Scalar>
 class KeypointFlow {
  public:

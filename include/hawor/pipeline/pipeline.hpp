@@ -97,12 +97,15 @@ class Pipeline {
     slamCam_.cx = (c.cx + Scalar(0.5)) * sx - Scalar(0.5), slamCam_.cy = (c.cy + Scalar(0.5)) * sy - Scalar(0.5);
     slamCam_.width = ss[0], slamCam_.height = ss[1];
     if (withLens_) rectify_ = std::make_unique<RectifyMap<Scalar>>(CameraModel<Scalar>{slamCam_, lens_.lens});
-    slam_ = std::make_unique<MonoSlam<Scalar>>(slamCam_, slamOptions(Scalar(-1)));
+    slam_ = std::make_unique<MonoSlam<Scalar>>(slamCam_, slamOptions());
     keepSlam_ = opt_.refineFocal && opt_.focalRerunBytes > 0;
   }
 
   const PipelineOptions<Scalar>& options() const { return opt_; }
   const PinholeCamera<Scalar>& slamCamera() const { return slamCam_; }
+  /// The options the SLAM runs with (its first pass; a further pass with a refined focal adds
+  /// that focal as its prior).
+  SlamOptions<Scalar> slamOptions() const { return slamOptions(Scalar(-1)); }
   int frames() const { return static_cast<int>(frames_.size()); }
 
   /// Called with what the SLAM is given on each frame, just before it runs: the frame at the
@@ -590,18 +593,6 @@ class Pipeline {
       return std::isfinite(double(speed)) && Scalar(age) * speed <= Scalar(0.5) * keypointExtent(last.keypoints2d);
     }
     return false;
-  }
-
-  /// The mean of the finite rows of a hand's keypoints (pixels).
-  static Vec2<Scalar> keypointCentre(const Pixels<Scalar>& kp) {
-    Vec2<Scalar> c = Vec2<Scalar>::Zero();
-    int n = 0;
-    for (Eigen::Index k = 0; k < kp.rows(); ++k) {
-      if (!std::isfinite(double(kp(k, 0))) || !std::isfinite(double(kp(k, 1)))) continue;
-      c += kp.row(k).transpose();
-      ++n;
-    }
-    return n > 0 ? Vec2<Scalar>(c / Scalar(n)) : Vec2<Scalar>::Constant(std::numeric_limits<Scalar>::quiet_NaN());
   }
 
   /// Masks, the SLAM's frame and the SLAM on the current frame.
