@@ -58,6 +58,9 @@ import { eyeHeightError } from './src/pipeline/eye_height.mjs';
 import { canonicalOptions, runTask, taskSlot } from './src/batch/task.mjs';
 import { formatSummary, summarize } from './src/batch/summary.mjs';
 import { workerTrackerFactory } from './src/perception/worker_tracker.mjs';
+import { loadOrt } from './src/ort_runtime.mjs';
+
+export { loadOrt };
 import { resultToWorldNpz, resultToHandsCamNpz, resultToTum, resultToJson } from './src/pipeline/exports.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -247,29 +250,6 @@ export async function loadCore(path) {
   } catch (e) {
     throw fail(`${e.message}${path ? '' : ' (or give --core)'}`);
   }
-}
-
-/**
- * The networks' runtime: onnxruntime-node (onnxruntime's native CPU build, an optional dependency;
- * the networks run 5-10x faster than in WebAssembly) unless `which` is 'wasm' or it is not
- * installed, else onnxruntime-web's WebAssembly build, the one the browser runs. Both take the
- * same ONNX files and API; their outputs agree to float rounding (tests/web/runtime.test.mjs).
- */
-export async function loadOrt(which = 'auto', threads = 2) {
-  if (which !== 'wasm') {
-    try {
-      const m = await import('onnxruntime-node');
-      const ort = m.default?.InferenceSession ? m.default : m;
-      ort.env.logLevel = 'error';
-      return { ort, runtime: 'native', sessionOptions: { executionProviders: ['cpu'], intraOpNumThreads: threads, interOpNumThreads: 1 } };
-    } catch (e) {
-      if (which === 'native') throw fail(`--runtime native: onnxruntime-node cannot be loaded (${e.message.split('\n')[0]}); npm install onnxruntime-node, or --runtime wasm`);
-    }
-  }
-  const ort = await import('onnxruntime-web');
-  ort.env.wasm.numThreads = threads;
-  ort.env.logLevel = 'error';
-  return { ort, runtime: 'wasm', sessionOptions: undefined };
 }
 
 /** The folder of an installed npm package as module resolution finds it from here, or null. */

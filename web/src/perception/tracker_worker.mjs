@@ -4,18 +4,12 @@
 import { parentPort, workerData } from 'node:worker_threads';
 
 import { HandTracker } from './hand_tracker.mjs';
+import { loadOrt } from '../ort_runtime.mjs';
 
 async function start() {
   const { runtime, sessionOptions, threads, palm, landmark, trackerOptions, lens, corePath } = workerData;
-  let ort;
-  if (runtime === 'native') {
-    const m = await import('onnxruntime-node');
-    ort = m.default?.InferenceSession ? m.default : m;
-  } else {
-    ort = await import('onnxruntime-web');
-    if (threads) ort.env.wasm.numThreads = threads;
-  }
-  ort.env.logLevel = 'error';
+  // the runtime the main thread chose (its session options come with it)
+  const { ort } = await loadOrt(runtime, threads ?? 2);
   let lensCrops = null;
   if (lens) {
     // perspective landmark crops through the lens, as runPipeline makes them on its own thread

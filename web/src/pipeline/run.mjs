@@ -421,13 +421,18 @@ export async function runPipeline(source, options, hooks = {}) {
     // otherwise, and live (each frame reported at once), it follows its own frame's push.
     const overlap = !!options.trackerFactory && !options.live;
     let pending = null;
+    // frame t done: its live estimates, its time (ms before `since`, plus since then) and the hooks
+    const report = (info, t, since, ms = 0) => {
+      if (options.live) liveInfo(info, t);
+      info.ms = ms + (now() - since);
+      if (onFrame) onFrame(info);
+      if (onProgress) onProgress({ stage: 'frames', done: t + 1, total: source.frameCount ?? null });
+    };
+    // the pending frame's SLAM step and its report; returns the time it took
     const finishFrame = (p) => {
       const ts = now();
       p.info.slamStatus = pipeline.trackPending().slamStatus;
-      if (options.live) liveInfo(p.info, p.T);
-      p.info.ms = p.ms + (now() - ts);
-      if (onFrame) onFrame(p.info);
-      if (onProgress) onProgress({ stage: 'frames', done: p.T + 1, total: source.frameCount ?? null });
+      report(p.info, p.T, ts, p.ms);
       return now() - ts;
     };
     const liveInfo = (info, t) => {
@@ -474,10 +479,7 @@ export async function runPipeline(source, options, hooks = {}) {
         info.slamStatus = r.slamStatus;
         ['left', 'right'].forEach((side, s) => { if (r.detection[s] >= 0) info.hands.push({ side, valid: !!r.valid[s] }); });
         if (frame.time !== undefined) pipeline.stampFrame(frame.time);
-        if (options.live) liveInfo(info, T);
-        info.ms = now() - tf;
-        if (onFrame) onFrame(info);
-        if (onProgress) onProgress({ stage: 'frames', done: T + 1, total: source.frameCount ?? null });
+        report(info, T, tf);
       } else {
         // --- perception of this frame, the last frame's SLAM step meanwhile ---
         const t1 = now();
