@@ -28,7 +28,7 @@ const ui = {
 const LIVE_LIMITS = { maxSeconds: 300, maxFrames: 3000 };
 
 const app = {
-  worker: null, ready: null, busy: false, run: null, result: null, meshes: null,
+  worker: null, ready: null, backend: null, busy: false, run: null, result: null, meshes: null,
   mano: { left: null, right: null }, depth: { onnx: null, config: null, configName: null },
   sample: null, frame: 0, playing: false, base: 0, hasVideo: false, lastRun: null, readyMs: null, errors: [],
   live: null, liveLimits: { ...LIVE_LIMITS },
@@ -95,8 +95,17 @@ function startWorker() {
   });
   // A worker has no import map: it gets the mapped URLs of what it loads from here.
   const hand = (side) => import.meta.resolve(`@webxr-input-profiles/assets/dist/profiles/generic-hand/${side}.glb`);
-  app.worker.postMessage({ type: 'init', urls: { ort: import.meta.resolve('onnxruntime-web'), hands: { left: hand('left'), right: hand('right') } } });
+  app.worker.postMessage({ type: 'init', urls: { ort: import.meta.resolve('onnxruntime-web'), ortWebgpu: import.meta.resolve('onnxruntime-web/webgpu'), hands: { left: hand('left'), right: hand('right') } } });
   return app.ready;
+}
+
+/// Which backend runs the hand networks, and why (execution_provider.mjs measured it).
+function showBackend(info) {
+  const name = info.provider === 'webgpu' ? 'WebGPU' : 'WebAssembly';
+  const note = $('backend-note');
+  note.textContent = `networks on ${name}: ${info.why}`;
+  note.dataset.provider = info.provider;
+  app.backend = info;
 }
 
 function onWorker(m, resolveReady) {
@@ -111,6 +120,7 @@ function onWorker(m, resolveReady) {
     case 'credit': if (run) { run.credits++; if (run.wake) { run.wake(); run.wake = null; } if (run.onCredit) run.onCredit(); } break;
     case 'progress': setStage(m.stage, m.done, m.total); break;
     case 'frame-info': break;
+    case 'backend': showBackend(m.info); break;
     case 'live-start': if (run && run.live) scene.startLive(m.intrinsics, run.meta.width, run.meta.height); break;
     case 'live-frame': onLiveFrame(m.info); break;
     case 'result': onResult(m.result, m.meshes); break;
@@ -176,7 +186,7 @@ function number(id) { const v = Number($(id).value); return $(id).value !== '' &
 /// sample's own focal, else the pipeline's default), the lens, the rolling-shutter readout, the
 /// camera height, the user's MANO and depth files. Throws an InputError for a wrong value.
 function formOptions(size, fps, sampleMeta = null) {
-  const options = { modelKind: $('opt-model').value };
+  const options = { modelKind: $('opt-model').value, backend: $('opt-backend').value };
   const focal = number('opt-focal'), fov = number('opt-fov');
   if (focal) options.focalPx = focal * size.scale;
   else if (fov) options.fovDeg = fov;

@@ -20,11 +20,14 @@
 import { loadCore } from '../src/core.mjs';
 import { handMeshSequence } from '../src/export/hand_meshes.mjs';
 import { buildGlb } from '../src/export/gltf.mjs';
+import { chooseProvider } from '../src/perception/execution_provider.mjs';
 
 let ort = null;          // onnxruntime-web's namespace, imported in init()
+let ortUrls = null;      // { ort, ortWebgpu }: its WebAssembly and WebGPU builds
 const state = {
   core: null,
   models: {},            // 'lite' | 'full' -> { palm, landmark } bytes
+  backends: {},          // 'PREFERENCE/KIND/THREADS' -> chooseProvider's answer (probed once a page)
   defaultHands: null,    // { left, right } bytes
   run: null,             // the clip being processed
   result: null,          // the last result
@@ -51,11 +54,38 @@ async function init(urls) {
   ]);
   state.core = core;
   ort = ortModule;
-  ort.env.wasm.wasmPaths = new URL('./', urls.ort).href;
-  ort.env.logLevel = 'error';
+  ortUrls = urls;
+  configureOrt(ort, urls.ort);
   // The licence-free default hand: the WebXR glTF hands, read by the core as they are.
   state.defaultHands = { left: { bytes: left, name: 'left.glb' }, right: { bytes: right, name: 'right.glb' } };
   return { ms: performance.now() - t0, crossOriginIsolated: self.crossOriginIsolated, cores: navigator.hardwareConcurrency };
+}
+
+function configureOrt(ns, url) {
+  ns.env.wasm.wasmPaths = new URL('./', url).href;
+  ns.env.logLevel = 'error';
+}
+
+/// The backend of the hand networks (WebAssembly or WebGPU; execution_provider.mjs), measured once
+/// per preference, network kind and thread count; the page is told which runs and why.
+async function networkBackend(preference, kind, nets, threads) {
+  const key = `${preference}/${kind}/${threads}`;
+  if (!state.backends[key]) {
+    ort.env.wasm.numThreads = threads;
+    state.backends[key] = await chooseProvider({
+      preference, ort, models: nets,
+      loadWebgpu: async () => {
+        if (!ortUrls.ortWebgpu) throw new Error('the page named no WebGPU build');
+        const ns = await import(ortUrls.ortWebgpu);
+        configureOrt(ns, ortUrls.ortWebgpu);
+        ns.env.wasm.numThreads = threads;
+        return ns;
+      },
+    });
+  }
+  const b = state.backends[key];
+  post({ type: 'backend', info: { provider: b.provider, why: b.why, adapter: b.adapter ?? null, ms: b.ms ?? null, disagreement: b.disagreement ?? null } });
+  return b;
 }
 
 async function networks(kind) {
@@ -156,9 +186,9 @@ async function start(meta, options) {
     // onnxruntime's threads: all cores but one (the page decodes the video meanwhile), at most 4;
     // threads need cross-origin isolation (SharedArrayBuffer).
     const threads = options.threads || (self.crossOriginIsolated ? Math.max(1, Math.min(4, (navigator.hardwareConcurrency || 2) - 1)) : 1);
-    ort.env.wasm.numThreads = threads;
+    const backend = await networkBackend(options.backend || 'auto', options.modelKind || 'lite', nets, threads);
     const opts = {
-      core: state.core, ort,
+      core: state.core, ort: backend.ort, sessionOptions: backend.sessionOptions,
       models: { palm: nets.palm, landmark: nets.landmark },
       handModels: { left: hands.left.bytes, right: hands.right.bytes, leftName: hands.left.name, rightName: hands.right.name },
       modelKind: options.modelKind || 'lite',
