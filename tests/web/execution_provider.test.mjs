@@ -10,23 +10,25 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 /// A stand-in onnxruntime namespace: every session answers `scale × sum(input)` after `ms`.
 function fakeOrt({ ms, scale = 1, failCreate = false }) {
   const created = [];
+  const released = [];
   class Tensor { constructor(type, data, dims) { Object.assign(this, { type, data, dims }); } }
   const InferenceSession = {
     async create(bytes, options) {
       if (failCreate) throw new Error('no kernel for Op X');
       created.push(options);
-      return {
+      const session = {
         inputNames: ['x'], outputNames: ['a', 'b'],
         async run(feeds) {
           await sleep(ms);
           let s = 0; for (const v of feeds.x.data) s += v;
           return { a: { data: Float32Array.of(s * scale, 1) }, b: { data: Float32Array.of(bytes.length) } };
         },
-        async release() {},
+        async release() { released.push(session); },
       };
+      return session;
     },
   };
-  return { Tensor, InferenceSession, created };
+  return { Tensor, InferenceSession, created, released };
 }
 const gpuWith = (info) => ({ async requestAdapter() { return info ? { info } : null; } });
 const models = { palm: new Uint8Array(3), landmark: new Uint8Array(5) };
@@ -68,10 +70,17 @@ test("'auto' takes WebGPU only when it agrees and is faster", async () => {
   assert.deepEqual(r.sessionOptions.executionProviders, ['webgpu']);
   assert.ok(r.ms.webgpu < r.ms.wasm && r.disagreement === 0, JSON.stringify(r));
   assert.match(r.why, /faster here/);
+  // the winner's sessions are handed on with the hand tracker's session options, the loser's released
+  assert.equal(ort.released.length, 2);
+  assert.equal(fast.released.length, 0);
+  assert.deepEqual(r.sessions.palmSession.inputNames, ['x']);
+  assert.equal(fast.created[0].graphOptimizationLevel, 'all');
+  assert.deepEqual(fast.created[0].executionProviders, ['webgpu']);
 
   const slow = await chooseProvider({ ort: fakeOrt({ ms: 2 }), loadWebgpu: async () => fakeOrt({ ms: 30 }), models, gpu: gpuWith(real) });
   assert.equal(slow.provider, 'wasm');
   assert.match(slow.why, /not faster here/);
+  assert.ok(slow.sessions && slow.sessions.palmSession, 'the WebAssembly probe\'s sessions are handed on');
 
   const off = await chooseProvider({ ort, loadWebgpu: async () => fakeOrt({ ms: 2, scale: 1 + 10 * AGREE_REL }), models, gpu: gpuWith(real) });
   assert.equal(off.provider, 'wasm');

@@ -189,7 +189,8 @@ async function start(meta, options) {
     const backend = await networkBackend(options.backend || 'auto', options.modelKind || 'lite', nets, threads);
     const opts = {
       core: state.core, ort: backend.ort, sessionOptions: backend.sessionOptions,
-      models: { palm: nets.palm, landmark: nets.landmark },
+      // the probe's sessions where it ran (kept for the page's later runs), else the bytes
+      models: backend.sessions ? { ...backend.sessions } : { palm: nets.palm, landmark: nets.landmark },
       handModels: { left: hands.left.bytes, right: hands.right.bytes, leftName: hands.left.name, rightName: hands.right.name },
       modelKind: options.modelKind || 'lite',
       threads,

@@ -10,9 +10,11 @@
 //      and times one run of each for the page to show).
 // Otherwise WebAssembly runs, and `why` says why, for the page to show.
 //
-// The probe makes its own sessions and releases them: the pipeline creates its sessions with the
-// chosen namespace and session options. Nothing here is method policy: the same networks run
-// either way, on the same inputs.
+// The probe's sessions of the chosen backend are handed on (HandTracker takes them as they are,
+// so WebGPU's shaders are not compiled twice); the other backend's are released. Nothing here is
+// method policy: the same networks run either way, on the same inputs.
+
+import { handSessionOptions } from './hand_tracker.mjs';
 
 export const PROVIDER_CHOICES = ['auto', 'wasm', 'webgpu'];
 export const AGREE_REL = 1e-3;
@@ -54,13 +56,14 @@ export function outputDisagreement(a, b) {
 }
 
 /// Runs both networks `1 + runs` times on the probe inputs with one backend: the warm-up's outputs
-/// (name -> Float32Array) and the timed runs' ms of the pair. `stopAfterMs`: stop timing once one
-/// run took longer (a backend already known to be slower).
+/// (name -> Float32Array), the timed runs' ms of the pair and the sessions ({ palmSession,
+/// landmarkSession }; release() them when not used). `stopAfterMs`: stop timing once one run took
+/// longer (a backend already known to be slower).
 async function probeBackend(ort, models, sessionOptions, runs, stopAfterMs = Infinity) {
   const sessions = [];
   try {
     for (const [bytes, S] of [[models.palm, 192], [models.landmark, 224]]) {
-      const s = await ort.InferenceSession.create(bytes, { graphOptimizationLevel: 'all', ...sessionOptions });
+      const s = await ort.InferenceSession.create(bytes, handSessionOptions(sessionOptions));
       sessions.push({ s, feeds: { [s.inputNames[0]]: new ort.Tensor('float32', probeInput(S), [1, S, S, 3]) } });
     }
     const outputs = {};
@@ -74,11 +77,17 @@ async function probeBackend(ort, models, sessionOptions, runs, stopAfterMs = Inf
       if (k > 0) ms.push(performance.now() - t0);
       if (k > 0 && ms[ms.length - 1] > stopAfterMs) break;
     }
-    return { outputs, ms };
-  } finally {
-    for (const { s } of sessions) await s.release?.();
+    return { outputs, ms, sessions: { palmSession: sessions[0].s, landmarkSession: sessions[1].s } };
+  } catch (e) {
+    await release(sessions.map((x) => x.s));
+    throw e;
   }
 }
+
+async function release(list) {
+  for (const s of list) { try { await s?.release?.(); } catch { /* already gone */ } }
+}
+const releaseBoth = (p) => (p ? release([p.sessions.palmSession, p.sessions.landmarkSession]) : undefined);
 
 /**
  * Picks the backend of the hand networks.
@@ -87,14 +96,16 @@ async function probeBackend(ort, models, sessionOptions, runs, stopAfterMs = Inf
  *   (loaded only when an adapter exists); models: { palm, landmark } ONNX bytes;
  *   sessionOptions: the WebAssembly session options the pipeline uses; runs: timed runs (3).
  * Returns { provider: 'wasm' | 'webgpu', ort, sessionOptions, why, adapter?, ms?: { wasm, webgpu },
- * disagreement? }.
+ * disagreement?, sessions?: { palmSession, landmarkSession } } (sessions: where the probe ran, the
+ * chosen backend's, for the caller to use and release).
  */
 export async function chooseProvider({ preference = 'auto', ort, loadWebgpu, models, sessionOptions = {}, runs = 3, gpu } = {}) {
   if (!PROVIDER_CHOICES.includes(preference)) throw new Error(`chooseProvider: unknown network backend "${preference}" (expected ${PROVIDER_CHOICES.join(', ')})`);
   const onWasm = (why, extra = {}) => ({ provider: 'wasm', ort, sessionOptions, why, ...extra });
   if (preference === 'wasm') return onWasm('WebAssembly was asked for');
-  const { adapter, name, software, why } = await webgpuAdapter(gpu);
-  if (!adapter) return onWasm(why);
+  const found = await webgpuAdapter(gpu);
+  const { adapter, name, software } = found;
+  if (!adapter) return onWasm(found.why);
   if (software && preference === 'auto') return onWasm(`the only WebGPU adapter is a software renderer (${name}), which runs on the same CPU cores`, { adapter: name });
   let gpuOrt;
   try { gpuOrt = await loadWebgpu(); } catch (e) { return onWasm(`onnxruntime-web's WebGPU build could not be loaded (${e.message})`, { adapter: name }); }
@@ -107,15 +118,22 @@ export async function chooseProvider({ preference = 'auto', ort, loadWebgpu, mod
   try {
     gpuRun = await probeBackend(gpuOrt, models, gpuOptions, runs, preference === 'auto' ? 2 * cpuMs : Infinity);
   } catch (e) {
-    return onWasm(`the networks failed on WebGPU (${e.message})`, { adapter: name });
+    return onWasm(`the networks failed on WebGPU (${e.message})`, { adapter: name, sessions: cpu.sessions });
   }
   let disagreement = 0;
   for (const [k, a] of Object.entries(cpu.outputs)) disagreement = Math.max(disagreement, gpuRun.outputs[k] ? outputDisagreement(a, gpuRun.outputs[k]) : Infinity);
   const ms = { wasm: cpuMs, webgpu: median(gpuRun.ms) };
   const extra = { adapter: name, ms, disagreement };
-  if (!(disagreement <= AGREE_REL)) return onWasm(`WebGPU's outputs differ from WebAssembly's (${disagreement.toExponential(1)} of their range)`, extra);
-  if (preference === 'auto' && !(ms.webgpu < FASTER * ms.wasm)) {
-    return onWasm(`WebGPU (${name}) is not faster here: ${ms.webgpu.toFixed(1)} against ${ms.wasm.toFixed(1)} ms per frame's networks`, extra);
+  let why = null;
+  if (!(disagreement <= AGREE_REL)) why = `WebGPU's outputs differ from WebAssembly's (${disagreement.toExponential(1)} of their range)`;
+  else if (preference === 'auto' && !(ms.webgpu < FASTER * ms.wasm)) why = `WebGPU (${name}) is not faster here: ${ms.webgpu.toFixed(1)} against ${ms.wasm.toFixed(1)} ms per frame's networks`;
+  if (why) {
+    await releaseBoth(gpuRun);
+    return onWasm(why, { ...extra, sessions: cpu.sessions });
   }
-  return { provider: 'webgpu', ort: gpuOrt, sessionOptions: gpuOptions, why: preference === 'webgpu' ? `WebGPU (${name}) was asked for; its outputs agree with WebAssembly's` : `WebGPU (${name}) is faster here: ${ms.webgpu.toFixed(1)} against ${ms.wasm.toFixed(1)} ms per frame's networks`, ...extra };
+  await releaseBoth(cpu);
+  return {
+    provider: 'webgpu', ort: gpuOrt, sessionOptions: gpuOptions, sessions: gpuRun.sessions, ...extra,
+    why: preference === 'webgpu' ? `WebGPU (${name}) was asked for; its outputs agree with WebAssembly's` : `WebGPU (${name}) is faster here: ${ms.webgpu.toFixed(1)} against ${ms.wasm.toFixed(1)} ms per frame's networks`,
+  };
 }

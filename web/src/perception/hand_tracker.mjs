@@ -29,6 +29,13 @@ function flowHand(p, st) {
     handednessScore: Math.max(pRight, 1 - pRight) };
 }
 
+/** The session options of the hand networks: the caller's over these defaults. The intra-op
+ *  pool's threads sleep between calls instead of spinning: the networks alternate with the
+ *  geometry (and a decoder) on the same few cores, which a spinning thread takes. */
+export function handSessionOptions(sessionOptions = {}) {
+  return { graphOptimizationLevel: 'all', extra: { session: { intra_op: { allow_spinning: '0' } } }, ...(sessionOptions ?? {}) };
+}
+
 export class HandTracker {
   /**
    * @param ort          the onnxruntime namespace
@@ -65,9 +72,7 @@ export class HandTracker {
    *                    track was lost, or while that track coasts, keeps the track.
    */
   static async create(ort, palmModel, landmarkModel, options = {}) {
-    // The intra-op pool's threads sleep between calls instead of spinning: the networks alternate
-    // with the geometry (and a decoder) on the same few cores, which a spinning thread takes.
-    const so = { graphOptimizationLevel: 'all', extra: { session: { intra_op: { allow_spinning: '0' } } }, ...(options.sessionOptions ?? {}) };
+    const so = handSessionOptions(options.sessionOptions);
     const palm = await ort.InferenceSession.create(palmModel, so);
     const landmark = await ort.InferenceSession.create(landmarkModel, so);
     return new HandTracker(ort, palm, landmark, options);
