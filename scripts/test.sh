@@ -91,7 +91,8 @@ run_node_stage() {
 }
 
 # The stages after the builds, in this order (each uses what the one before built):
-#   browser  the app end to end in headless Chromium (tests/browser): scripts/build_web.sh adds
+#   browser  the app end to end in headless Chromium (tests/browser; its WebGPU test beside
+#            package and readme): scripts/build_web.sh adds
 #            the synthetic sample (build/web), then node's runner drives Debian's chromium
 #            through playwright-core;
 #   package  the npm package (tests/package): npm pack (its prepack stages the WebAssembly core
@@ -107,11 +108,22 @@ run_late_stages() {
     tail -20 "$log_dir/browser-build.log" >&2; echo "[browser] build_web.sh FAILED" >&2
     total_fail=$((total_fail + 1)); status=1; return
   fi
-  run_node_stage browser tests/browser/*.test.mjs
+  local browser_tests=() f
+  for f in tests/browser/*.test.mjs; do [[ $f == */webgpu.test.mjs ]] || browser_tests+=("$f"); done
+  run_node_stage browser "${browser_tests[@]}"
+  # The WebGPU test (SwiftShader: seconds per inference, no timing asserted) runs beside package
+  # and readme, which mostly wait on npm and child processes; the app's tests above time the page.
+  background webgpu run_webgpu_stage
   echo "=== [package] node --test tests/package" >&2
   run_node_stage package tests/package/*.test.mjs
   echo "=== [readme] node --test tests/docs" >&2
   run_node_stage readme tests/docs/*.test.mjs
+  collect webgpu
+}
+
+run_webgpu_stage() {
+  echo "=== [webgpu] node --test tests/browser/webgpu.test.mjs" >&2
+  run_node_stage webgpu tests/browser/webgpu.test.mjs
 }
 
 # run_sanitize_suite: the parsers under ASan + UBSan (its own build folder, nothing shared).
