@@ -15,6 +15,8 @@
 // method policy: the same networks run either way, on the same inputs.
 
 import { handSessionOptions } from './hand_tracker.mjs';
+import { PALM_INPUT_SIZE } from './palm.mjs';
+import { LANDMARK_INPUT_SIZE } from './landmarks.mjs';
 
 export const PROVIDER_CHOICES = ['auto', 'wasm', 'webgpu'];
 export const AGREE_REL = 1e-3;
@@ -62,7 +64,7 @@ export function outputDisagreement(a, b) {
 async function probeBackend(ort, models, sessionOptions, runs, stopAfterMs = Infinity) {
   const sessions = [];
   try {
-    for (const [bytes, S] of [[models.palm, 192], [models.landmark, 224]]) {
+    for (const [bytes, S] of [[models.palm, PALM_INPUT_SIZE], [models.landmark, LANDMARK_INPUT_SIZE]]) {
       const s = await ort.InferenceSession.create(bytes, handSessionOptions(sessionOptions));
       sessions.push({ s, feeds: { [s.inputNames[0]]: new ort.Tensor('float32', probeInput(S), [1, S, S, 3]) } });
     }
