@@ -7,9 +7,11 @@
 //        [--model lite|full] [--warmup 5] [--no-cli] [--webgl-check N] [--timeout-s S] [--json FILE]
 //
 // The video is decoded once by ffmpeg (web/cli.mjs's probeVideo and decodeFrames, scaled with
-// its 'area' filter to --max-side on the long side) into RGB frames, which are also written as a
-// lossless FFV1 video (.mkv, bgr0: decodes back to the same bytes) in a temporary folder for the
-// CLI. One Chromium (launched as web/tools/bench_app.mjs does) loads a blank page from
+// its 'area' filter to --max-side on the long side) into RGB frames, which are also written
+// uncompressed (rawvideo rgb24 in NUT: the same bytes, nothing to decode) in a temporary folder
+// for the CLI: the page's frames are decoded before its clock starts, and so, in effect, are the
+// CLI's (a lossless codec's decoding, FFV1's 14 ms of CPU a frame at 960 px, would share the two
+// cores with the pipeline: a cost of the benchmark's own intermediate file, not of users' clips). One Chromium (launched as web/tools/bench_app.mjs does) loads a blank page from
 // web/server.mjs's createServer (cross-origin isolated: onnxruntime-web's threads) plus this
 // tool's own routes (/bench/: the page, its worker, the frames, @mediapipe/hands); the page and
 // its worker each fetch the raw frames once before any timing. Then, --runs rounds of:
@@ -26,7 +28,7 @@
 //                      maxNumHands 2, modelComplexity 0 (lite) / 1 (full), confidences 0.5,
 //                      selfieMode false, useCpuInference true. Per frame: `await hands.send()` on
 //                      a canvas already holding the frame (the RGB -> canvas copy is not timed).
-//   hawor-node         unless --no-cli: `node web/cli.mjs run FRAMES.mkv --out TMP --threads T
+//   hawor-node         unless --no-cli: `node web/cli.mjs run FRAMES.nut --out TMP --threads T
 //                      --model M` (HAWOR_HAND_DIR = the same WebXR hands), its printed msPerFrame
 //                      ((wall - load) / frames, decoding and writing included) and stage table.
 // Per-frame statistics (median, nearest-rank p95, mean; hands found per frame) skip the first
@@ -190,7 +192,7 @@ function within(promise, s, what) {
 // --- frames --------------------------------------------------------------------------------------
 
 /// The video's frames as RGB (long side at most maxSide, ffmpeg's area filter, even sizes as the
-/// CLI scales), in one buffer, and the same frames as a lossless FFV1 video for the CLI.
+/// CLI scales), in one buffer, and the same frames as an uncompressed video for the CLI.
 async function decode(o, tmp) {
   let info;
   try { info = probeVideo(o.video); } catch (e) { throw setupError(e.message); }
@@ -206,19 +208,19 @@ async function decode(o, tmp) {
   }
   if (!chunks.length) throw setupError(`${o.video}: ffmpeg decoded no frame`);
   const frames = Buffer.concat(chunks);
-  const mkv = join(tmp, `frames_${width}x${height}.mkv`);
+  const cliVideo = join(tmp, `frames_${width}x${height}.nut`);
   if (o.cli) {
     await new Promise((res, rej) => {
       const ff = spawn('ffmpeg', ['-v', 'error', '-y', '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-s', `${width}x${height}`, '-r', String(info.fps), '-i', '-',
-        '-c:v', 'ffv1', '-pix_fmt', 'bgr0', mkv], { stdio: ['pipe', 'ignore', 'pipe'] });
+        '-c:v', 'rawvideo', '-pix_fmt', 'rgb24', cliVideo], { stdio: ['pipe', 'ignore', 'pipe'] });
       let err = '';
       ff.stderr.on('data', (d) => { err += d; });
       ff.on('error', rej);
-      ff.on('close', (code) => (code === 0 ? res() : rej(new Error(`ffmpeg (writing ${mkv}): ${err.trim().split('\n').pop()}`))));
+      ff.on('close', (code) => (code === 0 ? res() : rej(new Error(`ffmpeg (writing ${cliVideo}): ${err.trim().split('\n').pop()}`))));
       ff.stdin.end(frames);
     });
   }
-  return { info, width, height, count: chunks.length, frames, mkv, decodeMs: timing.decode };
+  return { info, width, height, count: chunks.length, frames, cliVideo, decodeMs: timing.decode };
 }
 
 // --- the page and its worker (served at /bench/) -------------------------------------------------
@@ -361,7 +363,7 @@ function serve(o, decoded, pkgs) {
 function runCli(o, decoded, tmp, k, timeoutS, handDir) {
   return new Promise((res, rej) => {
     const out = join(tmp, `cli${k}`);
-    const args = [CLI, 'run', decoded.mkv, '--out', out, '--threads', String(o.threads), '--model', o.model];
+    const args = [CLI, 'run', decoded.cliVideo, '--out', out, '--threads', String(o.threads), '--model', o.model];
     const child = spawn(process.execPath, args, { env: { ...process.env, HAWOR_HAND_DIR: handDir }, stdio: ['ignore', 'pipe', 'pipe'] });
     let stdout = '', stderr = '';
     child.stdout.on('data', (d) => { stdout += d; });
