@@ -61,6 +61,11 @@
 //      against the rays' rotation between them), puts the frame back into the map it lost (a hand that covered the view
 //      moves away, a turn comes back), with no new scale. This is tried on every lost frame and,
 //      after the reset below, until a new map is built.
+//      TRACKS FOLLOWED BACK (backTrackFrames; mono_slam/front_end.hpp followTracksBack): the
+//      images of the lost frames are kept, and the first frame posed again (new map or old)
+//      follows its map's tracks back through them by KLT while PnP still poses each one (a new
+//      map at most backTrackBaselines pair gaps before its reference), so that finish() resects
+//      them instead of interpolating across the loss.
 //      Otherwise the frame is Lost, its rotation still follows the
 //      tracked rays; after lostFramesBeforeReset lost frames the system re-initialises a new map
 //      segment from the current frame and joins it to the old world at the frame where
@@ -98,7 +103,8 @@
 // a track) and, per keyframe, a 1/4-resolution mask bitmap (also for the two-view reference and
 // the last init.maxGap frames while no map exists); for relocalisation, the pyramids of
 // reloc.keyframes recent and up to
-// reloc.anchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; after
+// reloc.anchors anchor keyframes (about 1.6 MB each at 640×480), and of the last keyframe; while
+// lost, of up to backTrackFrames lost frames; after
 // a broken rotation chain, until its links are found, the lost segment's too (link.enabled); no
 // other images. finish() first
 // lets every image go, then holds every frame's observations twice more (≈ 24 bytes an
@@ -115,6 +121,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -275,6 +282,7 @@ class MonoSlam {
     }
     recordObservations(frames_.back());
     frames_.back().segment = segment_;
+    keepForTracksBack(f);
     return frames_.back().status;
   }
 
@@ -386,6 +394,8 @@ class MonoSlam {
   SE3T rotationCarriedOn(int f) const;
   bool coastRotation(int f);
   void dropJumpedTracks(const Mat3<Scalar>& dR);
+  void keepForTracksBack(int f);
+  void followTracksBack(int f);
 
   // initialisation (mono_slam/initialisation.hpp)
   void initialise(int f);
@@ -454,6 +464,12 @@ class MonoSlam {
   bool finished_ = false;
   State state_ = State::Initialising;
   ImagePyramid prevPyr_, curPyr_;
+  struct BackFrame {
+    int frame = -1;
+    ImagePyramid pyr;
+    CoarseMask mask;  ///< its hand mask
+  };
+  std::deque<BackFrame> backPyr_;  ///< the last unposed frames' images (backTrackFrames)
   ImageU8 curMask_;
   std::vector<unsigned char> maskTmp_;
   bool hasMask_ = false;

@@ -42,6 +42,8 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
       {"maskBlock", [](O& o) -> T& { return o.maskBlock; }},
       {"minInliers", [](O& o) -> T& { return o.minInliers; }},
       {"lostFramesBeforeReset", [](O& o) -> T& { return o.lostFramesBeforeReset; }},
+      {"backTrackFrames", [](O& o) -> T& { return o.backTrackFrames; }},
+      {"backTrackBaselines", [](O& o) -> T& { return o.backTrackBaselines; }},
       {"windowKeyframes", [](O& o) -> T& { return o.windowKeyframes; }},
       {"localIterations", [](O& o) -> T& { return o.localIterations; }},
       {"globalIterations", [](O& o) -> T& { return o.globalIterations; }},

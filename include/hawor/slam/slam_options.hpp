@@ -302,6 +302,17 @@ struct SlamOptions {
   SlamTurnOptions<Scalar> turn;     ///< fast head turns: turn mode, its tracking, the bridge, coasting
   TurnBridgeOptions<Scalar> bridge;
   int lostFramesBeforeReset = 4;
+  /// When a frame is posed after a loss (a new map, or the old map found again), the mapped tracks are followed back by KLT through the images of
+  /// up to this many of those frames (followTracksBack), so that finish() resects them against
+  /// the map instead of interpolating them; 0: off. A global shutter only (rollingShutter 0):
+  /// the frames keep the geometry's positions, which are the pixels only then. Memory: this many
+  /// image pyramids while the camera is lost (about 1.2 MB each at 640 × 360). Not before the
+  /// first map (posing those frames from it measured worse: docs/experiments.md).
+  int backTrackFrames = 20;
+  /// A map just built from a pair of frames poses frames before the pair's reference by
+  /// extrapolating its baseline: the walk back stops this many times the pair's frame gap before
+  /// the reference (unbounded, a fast_turns run went 0.36 → 0.51 %).
+  int backTrackBaselines = 2;
   /// Before a map, tracks more than this far off the frame's rotation from the rays are dropped
   /// (dropJumpedTracks); 0: off. Measured on fast_turns seeds 1-8 (bench_slam, masked /
   /// unmasked ATE sums, 300 frames and the first 100): 5° 21.3 / 19.0 and 39.9 / 29.2, 6° 22.7 /
@@ -336,6 +347,8 @@ struct SlamOptions {
       throw Error("pyramidLevels must be >= 1, maxFeatures >= 20, windowKeyframes >= 2, minInliers >= 6, lostFramesBeforeReset >= 1");
     }
     if (maskDilatePx < 0 || maskBlock < 1) throw Error("maskDilatePx must be >= 0, maskBlock >= 1");
+    if (backTrackFrames < 0 || backTrackFrames > 300) throw Error("backTrackFrames must be in 0..300");
+    if (backTrackBaselines < 0) throw Error("backTrackBaselines must be >= 0");
     if (!(std::abs(rollingShutter) <= Scalar(1))) throw Error("rollingShutter must be in [-1, 1]");
     init.validate();
     turn.validate();

@@ -336,6 +336,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
   // memory.
   prevPyr_ = ImagePyramid();
   curPyr_ = ImagePyramid();
+  std::deque<BackFrame>().swap(backPyr_);
   std::vector<KeyframePyramid>().swap(relocPyr_);
   std::vector<KeyframePyramid>().swap(linkPyr_);
   lastKfPyr_ = KeyframePyramid();

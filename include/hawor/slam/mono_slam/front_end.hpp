@@ -260,4 +260,139 @@ void MonoSlam<Scalar>::dropJumpedTracks(const Mat3<Scalar>& dR) {
   removeTracks(drop);
 }
 
+/// SlamOptions::backTrackFrames: after process() of frame f. An unposed frame's pyramid and hand
+/// mask are kept after a loss (the last backTrackFrames of them); the first posed frame after
+/// such frames follows the map's tracks back through them and lets them go.
+template <typename Scalar>
+void MonoSlam<Scalar>::keepForTracksBack(int f) {
+  if (opt_.backTrackFrames <= 0 || opt_.rollingShutter != Scalar(0)) return;
+  if (frames_[static_cast<std::size_t>(f)].posed) {
+    if (!backPyr_.empty()) followTracksBack(f);
+    backPyr_.clear();
+    return;
+  }
+  // Not before the first map: the frames there are placed by the first map's own passes, and
+  // posing them from it measured worse (docs/experiments.md).
+  if (!everInitialised_) return;
+  BackFrame k;
+  if (static_cast<int>(backPyr_.size()) >= opt_.backTrackFrames) {
+    k = std::move(backPyr_.front());  // (its buffers reused)
+    backPyr_.pop_front();
+  }
+  k.frame = f;
+  k.pyr.levels = curPyr_.levels;
+  k.mask = hasMask_ ? CoarseMask(curMask_, opt_.maskBlock) : CoarseMask();
+  backPyr_.push_back(std::move(k));
+}
+
+/// Frame f is posed after the unposed frames in backPyr_ (consecutive, up to f − 1): each track
+/// of f on a valid map point whose first observation is at frame b is tracked back by KLT from b
+/// to b − 1, b − 2, ... (forward-backward checked, started where the frames' rotations from the
+/// rays carry it, off the hand masks kept for those frames) while it holds, and recorded as an
+/// observation of those frames. Track ids only grow, so every id added to a frame is above its
+/// own and the per-frame lists stay sorted. finish() then poses those frames against the map
+/// (refineAllFrames' resection, the sequence refinement) where they would otherwise be
+/// interpolated: the frames between a loss and the new map (or the old map found again).
+template <typename Scalar>
+void MonoSlam<Scalar>::followTracksBack(int f) {
+  const int oldest = backPyr_.front().frame;
+  if (backPyr_.back().frame != f - 1) return;  // not the frames just before f
+  auto observes = [&](const Frame& fr, int id) {
+    return std::binary_search(fr.obsTrack.begin(), fr.obsTrack.end(), id);
+  };
+  auto positionIn = [&](const Frame& fr, int id) {
+    const auto it = std::lower_bound(fr.obsTrack.begin(), fr.obsTrack.end(), id);
+    return fr.obsUv[static_cast<std::size_t>(it - fr.obsTrack.begin())];
+  };
+  // (first observed frame, track id) of the mapped tracks first seen after the oldest kept frame
+  std::vector<std::pair<int, int>> born;
+  for (const int id : frames_[static_cast<std::size_t>(f)].obsTrack) {
+    const int pid = trackPoint_[static_cast<std::size_t>(id)];
+    if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+    int b = f;
+    while (b - 1 >= oldest && observes(frames_[static_cast<std::size_t>(b - 1)], id)) --b;
+    if (b - 1 >= oldest) born.emplace_back(b, id);
+  }
+  if (born.empty()) return;
+  std::sort(born.begin(), born.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::size_t next = 0;
+  std::vector<int> ids;
+  std::vector<Vec2f> from, to;
+  std::vector<char> ok;
+  const float margin = float(opt_.klt.halfWindow + 1);
+  int added = 0, reached = f;
+  // A map just built from the pair (refFrame_, f) poses frames before its reference by
+  // extrapolating its baseline: at most backTrackBaselines times the pair's gap back from it.
+  int lowest = oldest;
+  if (refFrame_ >= oldest && refFrame_ < f && frames_[static_cast<std::size_t>(refFrame_)].posed) {
+    lowest = std::max(oldest, refFrame_ - opt_.backTrackBaselines * (f - refFrame_));
+  }
+  for (int g = f - 1; g >= lowest; --g) {
+    // the tracks first seen at g + 1 join those followed back to it
+    const Frame& src = frames_[static_cast<std::size_t>(g + 1)];
+    for (; next < born.size() && born[next].first == g + 1; ++next) {
+      ids.push_back(born[next].second);
+      from.push_back(positionIn(src, born[next].second));
+    }
+    if (ids.empty()) continue;
+    Frame& dst = frames_[static_cast<std::size_t>(g)];
+    // start where the rotation between the frames moves each ray (the position held)
+    to = from;
+    if (src.rotationKnown && dst.rotationKnown) {
+      const Mat3<Scalar> R = dst.T.rotationMatrix().transpose() * src.T.rotationMatrix();
+      for (std::size_t i = 0; i < from.size(); ++i) {
+        const V2 x = normalised(from[i]);
+        const V3 r = R * V3(x(0), x(1), Scalar(1));
+        if (r(2) > Scalar(0)) to[i] = Vec2f(float(cam_.fx * r(0) / r(2) + cam_.cx), float(cam_.fy * r(1) / r(2) + cam_.cy));
+      }
+    }
+    const ImagePyramid& p1 = g + 1 == f ? curPyr_ : backPyr_[static_cast<std::size_t>(g + 1 - oldest)].pyr;
+    const BackFrame& b0 = backPyr_[static_cast<std::size_t>(g - oldest)];
+    trackKlt(p1, b0.pyr, from, to, ok, opt_.klt);
+    std::vector<std::pair<int, Vec2f>> kept;
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ok[i] && insideImage(to[i], margin) && !b0.mask.test(to[i](0), to[i](1))) kept.emplace_back(ids[i], to[i]);
+    }
+    std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const std::size_t before = dst.obsTrack.size();
+    for (const auto& k : kept) {
+      dst.obsTrack.push_back(k.first);
+      dst.obsUv.push_back(k.second);
+    }
+    // The frame must be posed by the map through them (PnP-RANSAC on all its map points):
+    // tracks followed onto the wrong texture end the walk back here.
+    std::vector<V3> X;
+    std::vector<V2> uv;
+    for (std::size_t i = 0; i < dst.obsTrack.size(); ++i) {
+      const int pid = trackPoint_[static_cast<std::size_t>(dst.obsTrack[i])];
+      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+      X.push_back(points_[static_cast<std::size_t>(pid)].X);
+      uv.push_back(V2(Scalar(dst.obsUv[i](0)), Scalar(dst.obsUv[i](1))));
+    }
+    bool posed = false;
+    if (static_cast<int>(X.size()) >= opt_.minInliers) {
+      PnPRansacOptions<Scalar> po = opt_.pnp;
+      po.minInliers = opt_.minInliers;
+      posed = solvePnPRansac(X, uv, cam_, po).ok();
+    }
+    if (!posed) {
+      dst.obsTrack.resize(before);
+      dst.obsUv.resize(before);
+      break;
+    }
+    ids.clear(), from.clear();
+    for (const auto& k : kept) {
+      ids.push_back(k.first);
+      from.push_back(k.second);
+    }
+    added += static_cast<int>(kept.size());
+    reached = g;
+  }
+  if (opt_.log) {
+    opt_.log("frame " + std::to_string(f) + ": tracks followed back over frames " + std::to_string(oldest) + "-" +
+             std::to_string(f - 1) + ": " + std::to_string(born.size()) + " map tracks, " + std::to_string(added) +
+             " observations added, back to frame " + std::to_string(reached));
+  }
+}
+
 }  // namespace hawor

@@ -10,13 +10,16 @@ namespace hawor {
 
 /// Applies the position map `g` (a similarity; `R`, when given, its rotation, else none) to
 /// segment `seg` and the segments started from it (inSegment: their worlds were joined to its;
-/// they continue its scale): their frames from f1 on, keyframes and points.
+/// they continue its scale): their frames from f1 on, the frames before f1 that its map posed
+/// (lost frames resected against it: their poses are in its world, where the unposed frames'
+/// guesses before f1 are in the world before it), keyframes and points.
 template <typename Scalar>
 template <typename G>
 void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g, const SO3<Scalar>* R) {
   auto move = [&](const SE3T& T) { return SE3T(R ? SO3<Scalar>(*R * T.rotation()) : T.rotation(), g(V3(T.translation()))); };
-  for (std::size_t f = static_cast<std::size_t>(f1); f < frames_.size(); ++f) {
-    if (inSegment(frames_[f].segment, seg)) frames_[f].T = move(frames_[f].T);
+  auto moves = [&](std::size_t f) { return (static_cast<int>(f) >= f1 || frames_[f].posed) && inSegment(frames_[f].segment, seg); };
+  for (std::size_t f = 0; f < frames_.size(); ++f) {
+    if (moves(f)) frames_[f].T = move(frames_[f].T);
   }
   for (Keyframe& kf : keyframes_) {
     if (inSegment(kf.segment, seg)) kf.T = move(kf.T);
@@ -28,7 +31,7 @@ void MonoSlam<Scalar>::transformFrom(int f1, int seg, const G& g, const SO3<Scal
   for (std::size_t j = 0; j < seqPoints_.size(); ++j) {
     if (seqPointObs_[j].empty()) continue;
     const int f = seqPointObs_[j].front().first;
-    if (f >= f1 && inSegment(frames_[static_cast<std::size_t>(f)].segment, seg)) seqPoints_[j] = g(V3(seqPoints_[j]));
+    if (moves(static_cast<std::size_t>(f))) seqPoints_[j] = g(V3(seqPoints_[j]));
   }
 }
 
