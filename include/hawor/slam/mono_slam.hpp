@@ -404,6 +404,7 @@ class MonoSlam {
   // tracking (mono_slam/tracking.hpp)
   static Scalar rotationAngleDeg(const SE3T& a, const SE3T& b);
   void mappedTracks(std::vector<V3>& X, std::vector<V2>& uv, std::vector<int>& ti) const;
+  void mappedObservations(const Frame& fr, std::vector<V3>& X, std::vector<V2>& uv, std::vector<int>& pids) const;
   void dropOutlierTracks(const std::vector<int>& ti, const std::vector<char>& inliers);
   int countMapped() const;
   void trackPose(int f);

@@ -82,13 +82,7 @@ void MonoSlam<Scalar>::refineAllFrames() {
     std::vector<V3> X;
     std::vector<V2> uv;
     std::vector<int> pids;
-    for (std::size_t i = 0; i < fr.obsTrack.size(); ++i) {
-      const int pid = trackPoint_[static_cast<std::size_t>(fr.obsTrack[i])];
-      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
-      X.push_back(points_[static_cast<std::size_t>(pid)].X);
-      uv.push_back(V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1))));
-      pids.push_back(pid);
-    }
+    mappedObservations(fr, X, uv, pids);
     if (static_cast<int>(X.size()) < opt_.minInliers) continue;
     PnPRansacOptions<Scalar> po = opt_.pnp;
     po.minInliers = opt_.minInliers;

@@ -363,12 +363,8 @@ void MonoSlam<Scalar>::followTracksBack(int f) {
     // tracks followed onto the wrong texture end the walk back here.
     std::vector<V3> X;
     std::vector<V2> uv;
-    for (std::size_t i = 0; i < dst.obsTrack.size(); ++i) {
-      const int pid = trackPoint_[static_cast<std::size_t>(dst.obsTrack[i])];
-      if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
-      X.push_back(points_[static_cast<std::size_t>(pid)].X);
-      uv.push_back(V2(Scalar(dst.obsUv[i](0)), Scalar(dst.obsUv[i](1))));
-    }
+    std::vector<int> pids;
+    mappedObservations(dst, X, uv, pids);
     bool posed = false;
     if (static_cast<int>(X.size()) >= opt_.minInliers) {
       PnPRansacOptions<Scalar> po = opt_.pnp;

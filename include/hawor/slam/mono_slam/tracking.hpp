@@ -27,6 +27,19 @@ void MonoSlam<Scalar>::mappedTracks(std::vector<V3>& X, std::vector<V2>& uv, std
   }
 }
 
+/// A frame's stored observations of valid map points (its tracks' points, as finish() and the
+/// tracks followed back resect it): the point's position, the pixel, the point's index.
+template <typename Scalar>
+void MonoSlam<Scalar>::mappedObservations(const Frame& fr, std::vector<V3>& X, std::vector<V2>& uv, std::vector<int>& pids) const {
+  for (std::size_t i = 0; i < fr.obsTrack.size(); ++i) {
+    const int pid = trackPoint_[static_cast<std::size_t>(fr.obsTrack[i])];
+    if (pid < 0 || !points_[static_cast<std::size_t>(pid)].valid) continue;
+    X.push_back(points_[static_cast<std::size_t>(pid)].X);
+    uv.push_back(V2(Scalar(fr.obsUv[i](0)), Scalar(fr.obsUv[i](1))));
+    pids.push_back(pid);
+  }
+}
+
 /// After PnP-RANSAC on mappedTracks: an outlier track has drifted off its point, so it is
 /// dropped (a new corner replaces it).
 template <typename Scalar>
