@@ -180,10 +180,12 @@ async function batchMain(o) {
   return r.failed ? 1 : 0;
 }
 
-/** ffprobe: width, height, fps, frame count (null when the container does not say). */
+/** ffprobe: the frame size as shown (a phone clip's display rotation applied, as ffmpeg's decoder
+ *  applies it: a portrait clip stored as 1920 x 1080 with a 90° rotation is 1080 x 1920), fps,
+ *  frame count (null when the container does not say) and the rotation in degrees. */
 export function probeVideo(video) {
   const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries',
-    'stream=width,height,r_frame_rate,avg_frame_rate,nb_frames', '-of', 'json', video], { encoding: 'utf8' });
+    'stream=width,height,r_frame_rate,avg_frame_rate,nb_frames:stream_side_data=rotation:stream_tags=rotate', '-of', 'json', video], { encoding: 'utf8' });
   if (r.error) throw fail('ffprobe is not installed (apt-get install ffmpeg)');
   let s = null;
   try { s = JSON.parse(r.stdout).streams?.[0] ?? null; } catch { s = null; }
@@ -196,17 +198,50 @@ export function probeVideo(video) {
   if (!(fps > 0 && fps < 1000)) fps = rate(s.r_frame_rate);
   if (!(fps > 0 && fps < 1000)) fps = 30;
   const n = Number(s.nb_frames);
-  return { width: s.width, height: s.height, fps, frameCount: Number.isInteger(n) && n > 0 ? n : null };
+  const turn = Number((s.side_data_list ?? []).find((d) => d.rotation !== undefined)?.rotation ?? s.tags?.rotate ?? 0);
+  const rotation = Number.isFinite(turn) ? ((Math.round(turn / 90) * 90) % 360 + 360) % 360 : 0;
+  const quarter = rotation === 90 || rotation === 270;
+  return { width: quarter ? s.height : s.width, height: quarter ? s.width : s.height, fps,
+    frameCount: Number.isInteger(n) && n > 0 ? n : null, rotation };
+}
+
+/** The frames' presentation times (seconds from the first frame) when the clip's frame rate varies
+ *  (phones lower it in dim light, screen recorders and edits leave gaps), from the packets' time
+ *  stamps (no decoding); null for a constant rate (every interval within 10 % of the median: the
+ *  times are frame / fps) or when the stamps are missing or repeat. fps: the median interval's
+ *  rate, the camera's frame rate while it kept pace. */
+export function variableFrameTimes(video) {
+  const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries', 'packet=pts_time,flags',
+    '-of', 'csv=p=0', video], { encoding: 'utf8', maxBuffer: 1 << 28 });
+  if (r.error || r.status !== 0) return null;
+  const t = [];
+  for (const line of r.stdout.split('\n')) {
+    const [pts, flags = ''] = line.trim().split(',');
+    if (!pts || flags.includes('D')) continue; // a packet the demuxer discards (an edit list's)
+    const x = Number(pts);
+    if (!Number.isFinite(x)) return null; // 'N/A': an elementary stream without time stamps
+    t.push(x);
+  }
+  if (t.length < 3) return null;
+  t.sort((a, b) => a - b);
+  const d = t.slice(1).map((x, i) => x - t[i]);
+  if (!d.every((x) => x > 0)) return null;
+  const med = [...d].sort((a, b) => a - b)[d.length >> 1];
+  if (d.every((x) => Math.abs(x - med) <= 0.1 * med)) return null;
+  return { times: t.map((x) => x - t[0]), fps: Math.round(1e3 / med) / 1e3 }; // stamps are in µs or coarser
 }
 
 /** Frames from one ffmpeg process as RGB24, one preallocated buffer per frame (backpressure:
  *  the pipe is read only as fast as the pipeline consumes frames). scaleTo: {width, height,
- *  flags?} resizes with ffmpeg's scale filter (flags default 'area'). */
-export async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing) {
+ *  flags?} resizes with ffmpeg's scale filter (flags default 'area'). Every decoded frame once
+ *  (no frames repeated or dropped to a constant rate); times (variableFrameTimes'): each frame
+ *  carries its `time`, a frame past the list the last interval on. */
+export async function* decodeFrames(video, width, height, scaleTo, maxFrames, timing, times = null) {
   const args = ['-v', 'error', '-nostdin', '-i', video, '-an', '-sn'];
   if (scaleTo) args.push('-vf', `scale=${scaleTo.width}:${scaleTo.height}:flags=${scaleTo.flags ?? 'area'}`);
   if (maxFrames) args.push('-frames:v', String(maxFrames));
-  args.push('-f', 'rawvideo', '-pix_fmt', 'rgb24', '-');
+  args.push('-fps_mode', 'passthrough', '-f', 'rawvideo', '-pix_fmt', 'rgb24', '-');
+  const timeOf = (i) => (i < times.length ? times[i] : times[times.length - 1] + (i - times.length + 1) * (times[times.length - 1] - times[times.length - 2]));
   const ff = spawn('ffmpeg', args, { stdio: ['ignore', 'pipe', 'pipe'] });
   let err = '';
   ff.stderr.on('data', (d) => { if (err.length < 1e4) err += d; });
@@ -225,7 +260,7 @@ export async function* decodeFrames(video, width, height, scaleTo, maxFrames, ti
         fill += n; off += n;
         if (fill === size) {
           timing.decode += performance.now() - t;
-          yield { index: index++, rgba: frame };
+          yield times ? { index, rgba: frame, time: timeOf(index++) } : { index: index++, rgba: frame };
           t = performance.now();
           frame = new Uint8Array(size);
           fill = 0;
@@ -399,9 +434,10 @@ export async function main(argv) {
     }
   }
   const decodeTiming = { decode: 0 };
-  const total = o.maxFrames ? Math.min(o.maxFrames, info.frameCount ?? Infinity) : info.frameCount;
-  const source = { width, height, fps: info.fps, frameCount: Number.isFinite(total) ? total : null,
-    frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming) };
+  const vfr = variableFrameTimes(o.video);
+  const total = o.maxFrames ? Math.min(o.maxFrames, vfr?.times.length ?? info.frameCount ?? Infinity) : vfr?.times.length ?? info.frameCount;
+  const source = { width, height, fps: vfr?.fps ?? info.fps, frameCount: Number.isFinite(total) ? total : null,
+    frames: decodeFrames(o.video, width, height, scaleTo, o.maxFrames, decodeTiming, vfr?.times) };
   const cpu0 = process.cpuUsage();
   const networks = { palm: new Uint8Array(readFileSync(palm)), landmark: new Uint8Array(readFileSync(lm)) };
   const trackerFactory = o.perception === 'thread'
@@ -416,6 +452,7 @@ export async function main(argv) {
   const pipelineLoadMs = result.timings.load;
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
   if (scaleTo) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
+  if (vfr) result.warnings.push(`the video's frame rate varies (${vfr.times.length} frames in ${vfr.times[vfr.times.length - 1].toFixed(2)} s, mostly ${vfr.fps.toFixed(2)} fps): each frame is timed by its time stamp`);
   const tw = performance.now();
   mkdirSync(o.out, { recursive: true });
   writeFileSync(join(o.out, 'world.npz'), resultToWorldNpz(result));
