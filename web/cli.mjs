@@ -181,11 +181,12 @@ async function batchMain(o) {
 }
 
 /** ffprobe: the frame size as shown (a phone clip's display rotation applied, as ffmpeg's decoder
- *  applies it: a portrait clip stored as 1920 x 1080 with a 90° rotation is 1080 x 1920), fps,
- *  frame count (null when the container does not say) and the rotation in degrees. */
+ *  applies it: a portrait clip stored as 1920 x 1080 with a 90° rotation is 1080 x 1920; non-square
+ *  pixels made square: `anamorphic`, decode with scaleTo that size), fps, frame count (null when
+ *  the container does not say) and the rotation in degrees. */
 export function probeVideo(video) {
   const r = spawnSync('ffprobe', ['-v', 'error', '-select_streams', 'v:0', '-show_entries',
-    'stream=width,height,r_frame_rate,avg_frame_rate,nb_frames:stream_side_data=rotation:stream_tags=rotate', '-of', 'json', video], { encoding: 'utf8' });
+    'stream=width,height,sample_aspect_ratio,r_frame_rate,avg_frame_rate,nb_frames:stream_side_data=rotation:stream_tags=rotate', '-of', 'json', video], { encoding: 'utf8' });
   if (r.error) throw fail('ffprobe is not installed (apt-get install ffmpeg)');
   let s = null;
   try { s = JSON.parse(r.stdout).streams?.[0] ?? null; } catch { s = null; }
@@ -201,8 +202,15 @@ export function probeVideo(video) {
   const turn = Number((s.side_data_list ?? []).find((d) => d.rotation !== undefined)?.rotation ?? s.tags?.rotate ?? 0);
   const rotation = Number.isFinite(turn) ? ((Math.round(turn / 90) * 90) % 360 + 360) % 360 : 0;
   const quarter = rotation === 90 || rotation === 270;
-  return { width: quarter ? s.height : s.width, height: quarter ? s.width : s.height, fps,
-    frameCount: Number.isInteger(n) && n > 0 ? n : null, rotation };
+  // non-square pixels (anamorphic video): the picture as shown, widened (or heightened) to
+  // square pixels, which the camera model assumes (fx = fy); the caller decodes at that size
+  let sar = rate(String(s.sample_aspect_ratio ?? '').replace(':', '/'));
+  if (!(sar > 0.1 && sar < 10) || Math.abs(sar - 1) < 0.01) sar = 1;
+  const even = (x) => Math.max(2, 2 * Math.round(x / 2));
+  const w = sar > 1 ? even(s.width * sar) : s.width;
+  const h = sar < 1 ? even(s.height / sar) : s.height;
+  return { width: quarter ? h : w, height: quarter ? w : h, fps, frameCount: Number.isInteger(n) && n > 0 ? n : null,
+    rotation, anamorphic: sar !== 1 };
 }
 
 /** The frames' presentation times (seconds from the first frame) when the clip's frame rate varies
@@ -410,7 +418,7 @@ export async function main(argv) {
   if (o.depthModel && !existsSync(depthConfig)) throw fail(`${depthConfig}: the depth model's config is missing (give --depth-config)`);
   const info = probeVideo(o.video);
   let { width, height } = info;
-  let scaleTo = null;
+  let scaleTo = info.anamorphic ? { width, height, flags: 'bicubic' } : null;
   if (width * height > MAX_PIXELS) {
     const s = 1920 / Math.max(width, height);
     scaleTo = { width: 2 * Math.round((width * s) / 2), height: 2 * Math.round((height * s) / 2) };
@@ -451,7 +459,8 @@ export async function main(argv) {
   const cpu = process.cpuUsage(cpu0);
   const pipelineLoadMs = result.timings.load;
   result.timings = { decode: decodeTiming.decode, ...result.timings, load: result.timings.load + coreLoadMs };
-  if (scaleTo) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
+  if (width !== info.width) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
+  if (info.anamorphic) result.warnings.push(`the video's pixels are not square: it was processed as shown, at ${width}x${height}`);
   if (vfr) result.warnings.push(`the video's frame rate varies (${vfr.times.length} frames in ${vfr.times[vfr.times.length - 1].toFixed(2)} s, mostly ${vfr.fps.toFixed(2)} fps): each frame is timed by its time stamp`);
   const tw = performance.now();
   mkdirSync(o.out, { recursive: true });

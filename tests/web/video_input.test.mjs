@@ -66,6 +66,22 @@ test('video input: a clip with a display rotation is probed and decoded as shown
   }
 });
 
+test('video input: non-square pixels are probed at the shown size with square pixels (turned with a rotation)', { skip: ffmpegSkip, timeout: 60000 }, () => {
+  const dir = mkdtempSync(join(tmpdir(), 'hawor-sar-'));
+  try {
+    const cases = [['480x360', '4/3', 0, [640, 360]], ['640x480', '3/4', 0, [640, 640]], ['480x360', '4/3', 90, [360, 640]], ['320x240', '1/1', 0, [320, 240]]];
+    for (const [size, sar, deg, want] of cases) {
+      const file = join(dir, `s${deg}.mp4`);
+      ffmpeg(['-f', 'lavfi', '-i', `testsrc2=s=${size}:r=30`, '-frames:v', '2', '-vf', `setsar=${sar}`, '-c:v', 'libx264', '-pix_fmt', 'yuv420p', join(dir, 'flat.mp4')]);
+      ffmpeg(['-i', join(dir, 'flat.mp4'), '-c', 'copy', '-metadata:s:v:0', `rotate=${deg}`, file]);
+      const info = probeVideo(file);
+      assert.deepEqual([info.width, info.height, info.anamorphic], [...want, sar !== '1/1'], `${size} SAR ${sar} rotate ${deg}`);
+    }
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('video input: a variable frame rate gives every frame once, at its own time; a constant one gives no times', { skip: ffmpegSkip, timeout: 60000 }, async () => {
   const dir = mkdtempSync(join(tmpdir(), 'hawor-vfr-'));
   try {
