@@ -6,12 +6,16 @@
 // Frames are rendered in memory (no PNG round trip) and fed to both SLAM runs in the same loop,
 // so the masked/unmasked comparison sees identical images and machine load.
 //
-//   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--seed N] [--model default|synthetic]
+//   bench_slam [--presets a,b,..] [--frames N] [--size WxH] [--fps F] [--slam-fps F] [--seed N] [--model default|synthetic]
 //              [--json FILE] [--dump PREFIX] [--masked-only] [--log] [--set NAME=VALUE,...]
 //   --dump PREFIX  per preset and mode, PREFIX_<preset>_<mode>.csv: frame, ground-truth and
 //                  estimated camera positions (estimate as output, not aligned), status, keyframe,
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
 //                  relative to the first frame (the estimate's world)
+//   --fps F        the camera's frame rate (default 30); without --frames each preset keeps its
+//                  duration (its frames × F / 30): the same motion sampled more or less densely
+//   --slam-fps F   the frame rate the SLAM is told (default: --fps), which scales its frame
+//                  counts (SlamOptions::fps); --fps 60 --slam-fps 30: the 30-fps counts at 60 fps
 //   --masked-only  skip the unmasked runs (quicker iterations)
 //   --log          each run's diagnostics (initialisation, keyframes, losses) on stderr
 //   --set NAME=VALUE,...  SlamOptions fields by name for both runs, the ablations
@@ -21,6 +25,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -68,6 +73,7 @@ struct RunStats {
 int main(int argc, char** argv) {
   std::vector<std::string> presets = hawor::synth::synthPresetNames();
   int frames = 0, width = 640, height = 480;
+  double fps = 30, slamFps = 0;
   unsigned long seed = 1;
   std::string model = "default", jsonPath, dumpPrefix;
   bool log = false, maskedOnly = false;
@@ -85,6 +91,14 @@ int main(int argc, char** argv) {
       presets = split(next());
     } else if (a == "--frames") {
       frames = std::stoi(next());
+    } else if (a == "--fps") {
+      fps = std::stod(next());
+      if (!(fps > 0 && fps <= 1000)) {
+        std::fprintf(stderr, "bench_slam: --fps must be in (0, 1000]\n");
+        return 2;
+      }
+    } else if (a == "--slam-fps") {
+      slamFps = std::stod(next());
     } else if (a == "--size") {
       const std::string s = next();
       if (std::sscanf(s.c_str(), "%dx%d", &width, &height) != 2) {
@@ -106,7 +120,7 @@ int main(int argc, char** argv) {
     } else if (a == "--set") {
       settings += (settings.empty() ? std::string() : std::string(",")) + next();
     } else {
-      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--set NAME=VALUE,...]\n");
+      std::fprintf(stderr, "usage: bench_slam [--presets a,b] [--frames N] [--size WxH] [--fps F] [--slam-fps F] [--seed N] [--model default|synthetic] [--json F] [--dump PREFIX] [--masked-only] [--log] [--set NAME=VALUE,...]\n");
       return 2;
     }
   }
@@ -147,13 +161,16 @@ int main(int argc, char** argv) {
       hawor::synth::SynthOptions so;
       so.width = width;
       so.height = height;
-      so.frames = frames;
-      hawor::synth::SynthSequence<double> seq(hawor::synth::findSynthPreset(name), seed, left, right, so);
+      const hawor::synth::SynthPreset preset = hawor::synth::findSynthPreset(name);
+      so.fps = fps;
+      so.frames = frames > 0 ? frames : static_cast<int>(std::lround(preset.frames * fps / 30));
+      hawor::synth::SynthSequence<double> seq(preset, seed, left, right, so);
       const int n = seq.numFrames();
       hawor::PinholeCamera<double> cam = seq.camera();
       hawor::SlamOptions<double> om, ou;
       hawor::setSlamOptions(om, settings);
       hawor::setSlamOptions(ou, settings);
+      om.fps = ou.fps = slamFps > 0 ? slamFps : fps;
       ou.useMasks = false;
       if (log) {
         om.log = [&name](const std::string& l) { std::fprintf(stderr, "[%s masked] %s\n", name.c_str(), l.c_str()); };

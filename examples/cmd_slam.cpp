@@ -53,7 +53,8 @@ const char* kSlamHelp =
     "                        pixels, depth (N,) along the optical axis (map units)\n"
     "  --stats STATS.json    per-frame status (tracked|interpolated|lost|relocalised),\n"
     "                        keyframe flags, PnP inliers and ms, plus totals\n"
-    "  --fps F               timestamps (default 30)\n"
+    "  --fps F               the frame rate (default 30): timestamps, and the SLAM's frame counts\n"
+    "                        and per-frame angles, stated for 30 fps, applied at F\n"
     "  --readout S           rolling shutter: seconds from the first row's exposure to the\n"
     "                        last's (a phone at 1080p: 0.015-0.03; default 0, a global\n"
     "                        shutter; negative: rows read bottom to top, as in a clip played\n"
@@ -140,6 +141,7 @@ int cmdSlam(int argc, char** argv) {
   const double readout = args.number("readout", 0.0);
   if (!(std::abs(readout) <= 1.0 / fps)) throw UsageError("--readout must be between -1/fps and 1/fps seconds");
   opt.rollingShutter = readout * fps;
+  opt.fps = fps;
   opt.finish.refineFocal = args.flag("refine-focal");
   if (args.has("focal-prior")) {
     if (!opt.finish.refineFocal) throw UsageError("--focal-prior needs --refine-focal");

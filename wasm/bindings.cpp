@@ -342,6 +342,9 @@ MonoSlam* newMonoSlam(const val& intrinsics, int width, int height, const val& o
       opt.rollingShutter = options["rollingShutter"].as<double>();
       if (!(std::abs(opt.rollingShutter) <= 1)) throw hawor::Error("rollingShutter must be in [-1, 1] (readout / frame interval; negative: rows read bottom to top)");
     }
+    if (!absent(options) && !absent(options["fps"])) {
+      opt.fps = options["fps"].as<double>();  // validated by MonoSlam: (0, 1000]
+    }
     if (!absent(options) && !absent(options["focalPriorSigma"])) {
       opt.focal.priorSigmaLog = options["focalPriorSigma"].as<double>();
       if (!(opt.focal.priorSigmaLog > 0)) throw hawor::Error("focalPriorSigma must be > 0");

@@ -4,7 +4,10 @@
 // tests/cli/test_slam_cli.py, which parses them independently.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include "hawor/slam/slam_option_table.hpp"
 
@@ -100,4 +103,68 @@ TEMPLATE_TEST_CASE("SlamOptions::validate names the bad field or combination", "
   cam.cx = TestType(320);
   cam.cy = TestType(240);
   CHECK_THROWS_WITH(hawor::MonoSlam<TestType>(cam, with("reloc.enabled=false")), Catch::Contains("revisit.enabled"));
+}
+
+TEMPLATE_TEST_CASE("SlamOptions::atFrameRate applies the 30-fps frame counts and head-speed bounds above 30 fps", "[slam][options]", float, double) {
+  using O = hawor::SlamOptions<TestType>;
+  const O d;  // 30 fps
+  // every frame count, read by name (the table), and its value at 30 fps
+  const std::vector<std::string> counts = {"init.everyFrames", "init.maxGap", "turn.holdFrames", "turn.maxBridgeFrames",
+                                           "turn.coastFrames", "place.minFramesApart", "reloc.spacing", "revisit.minFrames",
+                                           "link.everyFrames", "finish.focalFrameSpacing", "lostFramesBeforeReset",
+                                           "keyframe.maxInterval", "keyframe.minInterval", "keyframe.thinInterval",
+                                           "headModel.window", "headModel.minFrames", "headModel.lag", "backTrackFrames"};
+  const auto count = [](const O& o, const std::string& name) {
+    O copy = o;
+    const auto field = hawor::slam_option_detail::find(hawor::slam_option_detail::intFields<TestType>(), name);
+    REQUIRE(field != nullptr);
+    return field(copy);
+  };
+  const O same = d.atFrameRate();
+  for (const auto& n : counts) CHECK(count(same, n) == count(d, n));
+  CHECK(same.turn.coastMaxStepDeg == d.turn.coastMaxStepDeg);
+
+  O o = d;
+  o.fps = TestType(60);
+  const O at60 = o.atFrameRate();
+  for (const auto& n : counts) CHECK(count(at60, n) == 2 * count(d, n));
+  CHECK(at60.sequence.headModel.window == 2 * d.sequence.headModel.window);
+  CHECK(at60.turn.coastMaxStepDeg == Approx(double(d.turn.coastMaxStepDeg) / 2));
+  CHECK(at60.bridge.minStepDeg == Approx(double(d.bridge.minStepDeg) / 2));
+  CHECK(at60.maxRayJumpDeg == Approx(double(d.maxRayJumpDeg) / 2));
+  CHECK(at60.turn.rateDeg == d.turn.rateDeg);          // the image motion a frame: stays
+  CHECK(at60.init.minFlowPx == d.init.minFlowPx);      // not a count
+  CHECK(at60.keyframe.maxRotationDeg == d.keyframe.maxRotationDeg);
+  CHECK_NOTHROW(at60.validate());
+
+  // at 30 fps and below nothing changes (the counts also bound the frames of evidence)
+  o.fps = TestType(10);
+  const O at10 = o.atFrameRate();
+  for (const auto& n : counts) CHECK(count(at10, n) == count(d, n));
+  CHECK(at10.turn.coastMaxStepDeg == d.turn.coastMaxStepDeg);
+  CHECK(at10.maxRayJumpDeg == d.maxRayJumpDeg);
+  // 45 fps: × 1.5, rounded half away from zero; a 0 (off) stays 0
+  o.fps = TestType(45);
+  o.turn.coastFrames = 0;
+  const O at45 = o.atFrameRate();
+  CHECK(at45.lostFramesBeforeReset == 6);
+  CHECK(at45.init.everyFrames == 5);  // 4.5
+  CHECK(at45.keyframe.thinInterval == 2);  // 1.5
+  CHECK(at45.turn.coastFrames == 0);
+  CHECK(at45.turn.coastMaxStepDeg == Approx(double(d.turn.coastMaxStepDeg) / 1.5));
+  CHECK_NOTHROW(at45.validate());
+  o.fps = TestType(1000);
+  CHECK(o.atFrameRate().backTrackFrames == 300);  // the memory bound
+  CHECK_NOTHROW(o.atFrameRate().validate());
+
+  for (double bad : {0.0, -30.0, 1e4}) {
+    o.fps = TestType(bad);
+    CHECK_THROWS_WITH(o.atFrameRate(), Catch::Contains("fps"));
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("fps"));
+  }
+  hawor::PinholeCamera<TestType> cam;
+  cam.fx = cam.fy = TestType(500);
+  cam.cx = TestType(320);
+  cam.cy = TestType(240);
+  CHECK_THROWS_WITH(hawor::MonoSlam<TestType>(cam, o), Catch::Contains("fps"));
 }

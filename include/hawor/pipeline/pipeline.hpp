@@ -420,6 +420,7 @@ class Pipeline {
     o.useMasks = true;
     o.finish.refineFocal = opt_.refineFocal;
     o.rollingShutter = opt_.readout * opt_.fps;
+    o.fps = opt_.fps;
     o.focal.priorSigmaLog = opt_.priorSigma();
     if (priorFx > Scalar(0)) {
       o.finish.refineFocal = true;

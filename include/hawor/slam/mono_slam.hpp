@@ -224,7 +224,7 @@ class MonoSlam {
   using SE3T = SE3<Scalar>;
 
   MonoSlam(const PinholeCamera<Scalar>& camera, const SlamOptions<Scalar>& options = {})
-      : cam_(camera), opt_(options) {
+      : cam_(camera), opt_(options.atFrameRate()) {
     if (!(cam_.fx > Scalar(0)) || !(cam_.fy > Scalar(0)) || !std::isfinite(double(cam_.fx)) ||
         !std::isfinite(double(cam_.fy)) || !std::isfinite(double(cam_.cx)) || !std::isfinite(double(cam_.cy))) {
       throw Error("MonoSlam: the intrinsics must be finite with fx, fy > 0");

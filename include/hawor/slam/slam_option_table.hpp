@@ -118,6 +118,7 @@ const std::vector<Field<SlamOptions<Scalar>, Scalar>>& scalarFields() {
   using O = SlamOptions<Scalar>;
   using T = Scalar;
   static const std::vector<Field<O, T>> f = {
+      {"fps", [](O& o) -> T& { return o.fps; }},
       {"rollingShutter", [](O& o) -> T& { return o.rollingShutter; }},
       {"maxRayJumpDeg", [](O& o) -> T& { return o.maxRayJumpDeg; }},
       {"minTriangulationDeg", [](O& o) -> T& { return o.minTriangulationDeg; }},
