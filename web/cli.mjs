@@ -462,6 +462,9 @@ export async function main(argv) {
   if (width !== info.width) result.warnings.push(`the video (${info.width}x${info.height}) was downscaled to ${width}x${height}`);
   if (info.anamorphic) result.warnings.push(`the video's pixels are not square: it was processed as shown, at ${width}x${height}`);
   if (vfr) result.warnings.push(`the video's frame rate varies (${vfr.times.length} frames in ${vfr.times[vfr.times.length - 1].toFixed(2)} s, mostly ${vfr.fps.toFixed(2)} fps): each frame is timed by its time stamp`);
+  if (vfr && result.frameCount !== Math.min(vfr.times.length, o.maxFrames || Infinity)) {
+    result.warnings.push(`the video's time stamps list ${vfr.times.length} frames but ${result.frameCount} were decoded (a damaged file?): frames after a missing one may be timed a frame off`);
+  }
   const tw = performance.now();
   mkdirSync(o.out, { recursive: true });
   writeFileSync(join(o.out, 'world.npz'), resultToWorldNpz(result));
