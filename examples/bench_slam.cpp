@@ -13,7 +13,7 @@
 //                  hand coverage (fraction of the image), estimated camera-to-world quaternion, ground-truth one
 //                  relative to the first frame (the estimate's world)
 //   --fps F        the camera's frame rate (default 30); without --frames each preset keeps its
-//                  duration (its frames × F / 30): the same motion sampled more or less densely
+//                  duration: the same motion sampled more or less densely
 //   --slam-fps F   the frame rate the SLAM is told (default: --fps), which scales its frame
 //                  counts (SlamOptions::fps); --fps 60 --slam-fps 30: the 30-fps counts at 60 fps
 //   --masked-only  skip the unmasked runs (quicker iterations)
@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
       so.height = height;
       const hawor::synth::SynthPreset preset = hawor::synth::findSynthPreset(name);
       so.fps = fps;
-      so.frames = frames > 0 ? frames : static_cast<int>(std::lround(preset.frames * fps / 30));
+      so.frames = frames;  // 0: the preset's duration at any rate
       hawor::synth::SynthSequence<double> seq(preset, seed, left, right, so);
       const int n = seq.numFrames();
       hawor::PinholeCamera<double> cam = seq.camera();

@@ -175,3 +175,26 @@ TEST_CASE("synth: hands hold still in the room while the head moves (table_work)
     CHECK(camDuring > 0.005);
   }
 }
+
+TEST_CASE("synth: another frame rate samples the same motion over the preset's duration", "[synth]") {
+  const Hands<double>& h = syntheticHands<double>();
+  for (const std::string name : {"fast_turns", "table_work"}) {
+    hs::SynthOptions o30 = smallOptions(32), o60 = smallOptions(32), o15 = smallOptions(32);
+    o30.frames = o60.frames = o15.frames = 0;  // the preset's default length
+    o60.fps = 60;
+    o15.fps = 15;
+    const hs::SynthSequence<double> a(hs::findSynthPreset(name), 3, h.left, h.right, o30, sharedScene<double>(3));
+    const hs::SynthSequence<double> b(hs::findSynthPreset(name), 3, h.left, h.right, o60, sharedScene<double>(3));
+    const hs::SynthSequence<double> c(hs::findSynthPreset(name), 3, h.left, h.right, o15, sharedScene<double>(3));
+    const int n = hs::findSynthPreset(name).frames;
+    CHECK(a.numFrames() == n);
+    CHECK(b.numFrames() == 2 * n);
+    CHECK(c.numFrames() == (n + 1) / 2);
+    // frame i at 30 fps is frame 2i at 60 fps and frame i/2 at 15 fps: the same time, the same pose
+    for (int i = 0; i < n; i += 7) {
+      CHECK((a.worldFromCamera(i).t - b.worldFromCamera(2 * i).t).norm() < 1e-9);
+      CHECK(angleBetween(a.worldFromCamera(i).R, b.worldFromCamera(2 * i).R) < 1e-9);
+      if (i % 2 == 0) CHECK((a.worldFromCamera(i).t - c.worldFromCamera(i / 2).t).norm() < 1e-9);
+    }
+  }
+}

@@ -68,7 +68,7 @@ namespace synth {
 /// Size, length and camera of a generated sequence.
 struct SynthOptions {
   int width = 640, height = 480;
-  int frames = 0;          ///< 0: the preset's default
+  int frames = 0;          ///< 0: the preset's duration (its default frames at 30 fps)
   double fps = 30;
   double fovDeg = 90;      ///< diagonal field of view (PinholeCamera::fromFov)
   int textureDivisor = 1;  ///< 1 full-resolution textures, 2 or 4 coarser (faster setup)
@@ -139,7 +139,8 @@ class SynthSequence {
     lens_ = co.lens.template cast<Scalar>();
     fovDeg_ = co.fovDeg > 0 ? co.fovDeg : opt_.fovDeg;
     camera_ = lensIntrinsics<Scalar>(opt_.width, opt_.height, fovDeg_, lensD_);
-    frames_ = opt_.frames > 0 ? opt_.frames : preset_.frames;
+    // the preset's duration (its frames are at 30 fps): another rate samples the same motion
+    frames_ = opt_.frames > 0 ? opt_.frames : std::max(1, static_cast<int>(std::lround(preset_.frames * opt_.fps / 30)));
     const double readNoise = co.readNoise >= 0 ? co.readNoise : opt_.noiseSigma >= 0 ? opt_.noiseSigma : preset_.noiseSigma;
     noise_ = static_cast<float>(readNoise);
     plan();
