@@ -161,10 +161,9 @@ int main(int argc, char** argv) {
       hawor::synth::SynthOptions so;
       so.width = width;
       so.height = height;
-      const hawor::synth::SynthPreset preset = hawor::synth::findSynthPreset(name);
       so.fps = fps;
       so.frames = frames;  // 0: the preset's duration at any rate
-      hawor::synth::SynthSequence<double> seq(preset, seed, left, right, so);
+      hawor::synth::SynthSequence<double> seq(hawor::synth::findSynthPreset(name), seed, left, right, so);
       const int n = seq.numFrames();
       hawor::PinholeCamera<double> cam = seq.camera();
       hawor::SlamOptions<double> om, ou;

@@ -387,10 +387,11 @@ struct SlamOptions {
                    &o.place.minFramesApart, &o.reloc.spacing, &o.revisit.minFrames, &o.link.everyFrames,
                    &o.finish.focalFrameSpacing, &o.lostFramesBeforeReset, &o.keyframe.maxInterval, &o.keyframe.minInterval,
                    &o.keyframe.thinInterval, &o.headModel.window, &o.headModel.minFrames, &o.headModel.lag,
-                   &o.sequence.headModel.window, &o.sequence.headModel.minFrames, &o.sequence.headModel.lag}) {
+                   &o.sequence.headModel.window, &o.sequence.headModel.minFrames, &o.sequence.headModel.lag,
+                   &o.backTrackFrames}) {
       frames(*n);
     }
-    o.backTrackFrames = std::min(300, o.backTrackFrames <= 0 ? 0 : std::max(1, static_cast<int>(std::lround(o.backTrackFrames * k))));
+    o.backTrackFrames = std::min(300, o.backTrackFrames);  // the memory bound validate() keeps
     // turn.rateDeg stays a frame's: turn mode is about the image motion between two frames,
     // which KLT and the map's tracking must bridge (60 fps, fast_turns seeds 1-4: median 5.0 %
     // scaled, 2.5 % not)
