@@ -144,6 +144,50 @@ TEST_CASE("MonoSlam: walking sequence with hands, accurate up to a similarity", 
   CHECK(close > rel.size() * 8 / 10);
 }
 
+TEST_CASE("MonoSlam: at 60 fps every other frame is tracked and the frames between interpolated (frameStep)", "[slam][system]") {
+  // the walk's first two seconds at 60 fps: the same motion as the 60 frames above
+  hs::SynthOptions so = slam_test::sequenceOptions(120);
+  so.fps = 60;
+  hs::SynthSequence<double> seq(hs::findSynthPreset("walk"), 3, leftHand(), rightHand(), so);
+  hawor::SlamOptions<double> opt;
+  opt.fps = 60;  // frameStep automatic: 2
+  hawor::MonoSlam<double> slam(seq.camera(), opt);
+  CHECK(slam.frameStep() == 2);
+  Run r;
+  hs::SynthFrame<double> fr;
+  for (int i = 0; i < seq.numFrames(); ++i) {
+    seq.renderFrame(i, fr);
+    r.gt.push_back(fr.worldFromCamera.t);
+    r.gtR.push_back(fr.worldFromCamera.R);
+    const hawor::SlamStatus st = slam.process(fr.images.rgb, &fr.images.mask);
+    if (i % 2 == 1) CHECK(st != hawor::SlamStatus::Tracked);  // not tracked: provisional
+    CHECK(slam.numFrames() == i + 1);
+    CHECK(slam.livePose(i).translation().allFinite());
+  }
+  r.result = slam.finish();
+  for (std::size_t i = 1; i < r.gt.size(); ++i) r.path += (r.gt[i] - r.gt[i - 1]).norm();
+  const int n = static_cast<int>(r.result.poses.size());
+  REQUIRE(n == 120);
+  CHECK(r.result.initialised);
+  int oddKeyframes = 0, oddTracked = 0;
+  for (int i = 1; i < n; i += 2) {
+    oddKeyframes += r.result.keyframe[std::size_t(i)];
+    oddTracked += r.result.status[std::size_t(i)] == hawor::SlamStatus::Tracked ? 1 : 0;
+  }
+  CHECK(oddKeyframes == 0);
+  CHECK(oddTracked == 0);
+  for (const auto& d : r.result.keyframeDepths) CHECK(d.frame % 2 == 0);
+  CHECK(r.result.count(hawor::SlamStatus::Tracked) >= n * 3 / 8);
+  CHECK(r.result.count(hawor::SlamStatus::Lost) == 0);
+  const double ate = ateMetres(r);
+  INFO("ATE " << ate << " m over a path of " << r.path << " m");
+  CHECK(ate < 0.02 * r.path);
+  // the interpolated frames' rotations as good as the tracked ones' (the walk turns slowly)
+  double worst = 0;
+  for (int i = 1; i < n; i += 2) worst = std::max(worst, rotationErrorDeg(r, i));
+  CHECK(worst < 1.0);
+}
+
 TEST_CASE("MonoSlam: fast head turns, the map is built within the first turn (turn mode)", "[slam][system]") {
   // fast_turns, seed 1: a fixation (eye still to 2 mm: no parallax), then head turns at frames
   // ~38-50 and ~70-81 of 60-150 degrees in half a second whose only translation is the 9 cm

@@ -126,7 +126,9 @@ TEMPLATE_TEST_CASE("SlamOptions::atFrameRate applies the 30-fps frame counts and
 
   O o = d;
   o.fps = TestType(60);
+  o.frameStep = 1;  // every frame tracked
   const O at60 = o.atFrameRate();
+  CHECK(at60.frameStep == 1);
   for (const auto& n : counts) CHECK(count(at60, n) == 2 * count(d, n));
   CHECK(at60.sequence.headModel.window == 2 * d.sequence.headModel.window);
   CHECK(at60.turn.coastMaxStepDeg == Approx(double(d.turn.coastMaxStepDeg) / 2));
@@ -158,6 +160,7 @@ TEMPLATE_TEST_CASE("SlamOptions::atFrameRate applies the 30-fps frame counts and
   CHECK_NOTHROW(o.atFrameRate().validate());
 
   for (double bad : {0.0, -30.0, 1e4}) {
+    o.frameStep = 1;
     o.fps = TestType(bad);
     CHECK_THROWS_WITH(o.atFrameRate(), Catch::Contains("fps"));
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("fps"));
@@ -167,4 +170,36 @@ TEMPLATE_TEST_CASE("SlamOptions::atFrameRate applies the 30-fps frame counts and
   cam.cx = TestType(320);
   cam.cy = TestType(240);
   CHECK_THROWS_WITH(hawor::MonoSlam<TestType>(cam, o), Catch::Contains("fps"));
+}
+
+TEMPLATE_TEST_CASE("SlamOptions::atFrameRate with a frame step: the options of the tracked rate", "[slam][options]", float, double) {
+  using O = hawor::SlamOptions<TestType>;
+  const O d;
+  O o = d;
+  o.fps = TestType(60);  // automatic step: 2, tracked at 30 fps
+  o.rollingShutter = TestType(0.6);
+  const O at60 = o.atFrameRate();
+  CHECK(at60.frameStep == 2);
+  CHECK(at60.fps == Approx(30));
+  CHECK(at60.rollingShutter == Approx(0.3));  // the readout, a fraction of the tracked frames' interval
+  CHECK(at60.lostFramesBeforeReset == d.lostFramesBeforeReset);
+  CHECK(at60.keyframe.maxInterval == d.keyframe.maxInterval);
+  CHECK(at60.maxRayJumpDeg == d.maxRayJumpDeg);
+  // an explicit step at 120 fps: tracked at 40 fps, the counts × 4/3
+  o.fps = TestType(120);
+  o.frameStep = 3;
+  const O at120 = o.atFrameRate();
+  CHECK(at120.frameStep == 3);
+  CHECK(at120.fps == Approx(40));
+  CHECK(at120.lostFramesBeforeReset == 5);  // 4 · 4/3 = 5.3
+  CHECK(at120.maxRayJumpDeg == Approx(double(d.maxRayJumpDeg) * 0.75));
+  // the automatic step keeps the tracked rate at or above 25 fps
+  for (auto [fps, step] : std::vector<std::pair<double, int>>{{10, 1}, {29.97, 1}, {30, 1}, {48, 1}, {50, 2}, {59.94, 2}, {60, 2}, {90, 3}, {120, 4}, {240, 9}}) {
+    CAPTURE(fps);
+    CHECK(hawor::autoFrameStep(fps) == step);
+    if (fps >= 25) CHECK(fps / step >= 25.0);
+  }
+  o.frameStep = -1;
+  CHECK_THROWS_WITH(o.atFrameRate(), Catch::Contains("frameStep"));
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("frameStep"));
 }

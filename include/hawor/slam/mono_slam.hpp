@@ -111,7 +111,10 @@
 // observation as the sequence refinement's input, 12 grouped by track inside it) and the
 // adjustment of at most sequence.maxAdjustedFrames frames.
 // Not thread-safe; one instance per video.
-// This header holds the options, the result, the class with its state and process(); the member
+// A video at 50 fps or more is tracked on every frameStep-th frame, the frames between posed by
+// interpolation in finish() (frame_step.hpp).
+// This header holds the class with its state and process() (the options in slam_options.hpp,
+// the result in slam_result.hpp); the member
 // functions are in mono_slam/, one part a header, in the order a frame meets them: front_end,
 // initialisation, tracking, relocalisation (with the revisit and segment-link searches),
 // place_links (place recognition, segments placed by it), mapping (keyframes, bundle adjustment),
@@ -147,74 +150,13 @@
 #include "hawor/slam/sequence_refine.hpp"
 #include "hawor/slam/sim3_ransac.hpp"
 #include "hawor/slam/slam_options.hpp"
+#include "hawor/slam/slam_result.hpp"
+#include "hawor/slam/frame_step.hpp"
 #include "hawor/slam/triangulation.hpp"
 #include "hawor/slam/turn_bridge.hpp"
 #include "hawor/slam/two_view.hpp"
 
 namespace hawor {
-
-/// Per-frame status of the SLAM output.
-enum class SlamStatus : int {
-  Tracked = 0,       ///< pose from the frame's features against the map
-  Interpolated = 1,  ///< no map pose: rotation from the tracked rays or interpolation, position held/interpolated
-  Lost = 2,          ///< tracking was lost here; the pose is interpolated between good frames
-  Relocalised = 3,   ///< put back into the lost map (relocalisation), or the first frame of a re-initialised segment
-};
-
-inline const char* slamStatusName(SlamStatus s) {
-  switch (s) {
-    case SlamStatus::Tracked: return "tracked";
-    case SlamStatus::Interpolated: return "interpolated";
-    case SlamStatus::Lost: return "lost";
-    case SlamStatus::Relocalised: return "relocalised";
-  }
-  return "unknown";
-}
-
-/// Sparse depths of one keyframe for the scale step: pixels and depths along the optical axis
-/// (map units), of the map points it observes outside the hand masks.
-template <typename Scalar>
-struct SlamKeyframeDepths {
-  int frame = 0;
-  std::vector<Vec2<Scalar>> uv;
-  std::vector<Scalar> depth;
-};
-
-template <typename Scalar>
-struct SlamResult {
-  std::vector<SE3<Scalar>> poses;     ///< T_w_c per frame, world = first frame's camera
-  std::vector<SlamStatus> status;     ///< per frame
-  std::vector<char> keyframe;         ///< per frame
-  std::vector<int> inliers;           ///< per frame: PnP inliers (0 without a map pose)
-  std::vector<SlamKeyframeDepths<Scalar>> keyframeDepths;
-  std::vector<Vec3<Scalar>> points;   ///< final map points (world)
-  int numKeyframes = 0;
-  int numAdjustedKeyframes = 0;       ///< keyframes in the final global bundle adjustment (the others redundant)
-  int numLosses = 0;                  ///< tracking-loss events (runs of Lost frames)
-  int numResets = 0;                  ///< map re-initialisations (a reset undone by relocalisation is not one)
-  int numRelocalisations = 0;         ///< lost frames put back into the map they had lost
-  int numPlaceRelocalisations = 0;    ///< lost frames put into a map (the lost one or an older one) by place recognition
-  int numRevisitPoints = 0;           ///< old map points found again by the revisit search
-  int numPlaceLinks = 0;              ///< keyframes linked to an older one of the same place (SlamOptions::place)
-  /// Those links: keyframe `frame` saw the place keyframe `oldFrame` had seen, verified by a
-  /// Sim(3) over `points` matched map points (mono_slam/place_links.hpp); in the order found.
-  struct PlaceLink {
-    int frame = 0, oldFrame = 0, points = 0;
-  };
-  std::vector<PlaceLink> placeLinks;
-  int numPlacedSegments = 0;          ///< map segments moved into an earlier one's world by those links
-  int numRefinedFrames = 0;           ///< frames adjusted by the sequence refinement (0: not run)
-  int numHeadModelFrames = 0;         ///< unposed frames placed by the head model
-  bool initialised = false;           ///< a map was ever built (false: rotation-only output)
-  PinholeCamera<Scalar> camera;       ///< the intrinsics of the output (refined when focal.changed)
-  bool focalAttempted = false;        ///< SlamOptions::finish.refineFocal ran (false: off, or no map)
-  FocalRefineResult<Scalar> focal;    ///< its outcome (reason says why declined / not applied)
-  int count(SlamStatus s) const {
-    int n = 0;
-    for (SlamStatus t : status) n += t == s ? 1 : 0;
-    return n;
-  }
-};
 
 template <typename Scalar>
 class MonoSlam {
@@ -241,15 +183,24 @@ class MonoSlam {
   /// of the wrong size; a textureless or fully masked frame is simply not tracked.
   SlamStatus process(const ImageU8& image, const ImageU8* mask = nullptr) {
     if (finished_) throw Error("MonoSlam: process() after finish()");
+    const int input = inputFrames_;
     if (!image.consistent() || image.width <= 0 || image.height <= 0) {
-      throw Error("MonoSlam: frame " + std::to_string(frames_.size()) + " is empty");
+      throw Error("MonoSlam: frame " + std::to_string(input) + " is empty");
     }
-    if (frames_.empty()) {
+    if (input == 0) {
       width_ = image.width, height_ = image.height;
     } else if (image.width != width_ || image.height != height_) {
-      throw Error("MonoSlam: frame " + std::to_string(frames_.size()) + " is " + std::to_string(image.width) +
+      throw Error("MonoSlam: frame " + std::to_string(input) + " is " + std::to_string(image.width) +
                   "x" + std::to_string(image.height) + " but the first frame was " + std::to_string(width_) +
                   "x" + std::to_string(height_));
+    }
+    if (mask && (mask->width != width_ || mask->height != height_)) {
+      binaryHandMask(*mask, width_, height_, curMask_);  // throws its size error
+    }
+    ++inputFrames_;
+    // between tracked frames (frameStep): posed by interpolation in finish()
+    if (input % opt_.frameStep != 0) {
+      return frames_.back().status == SlamStatus::Lost ? SlamStatus::Lost : SlamStatus::Interpolated;
     }
     std::swap(prevPyr_, curPyr_);
     curPyr_.build(image, opt_.pyramidLevels);
@@ -293,8 +244,9 @@ class MonoSlam {
   /// The tracker's causal estimates, before finish() refines them: frame f's camera-to-world
   /// pose in the first frame's camera (after a reset, in the new map's world: it jumps), whether
   /// a map posed it (else held or guessed), and the map's points in the same world.
-  SE3T livePose(int f) const { return frames_[0].T.inverse() * frames_.at(static_cast<std::size_t>(f)).T; }
-  bool livePosed(int f) const { return frames_.at(static_cast<std::size_t>(f)).posed; }
+  /// A frame between tracked ones (frameStep) holds the last tracked frame's estimate.
+  SE3T livePose(int f) const { return frames_[0].T.inverse() * frames_.at(trackedIndex(f)).T; }
+  bool livePosed(int f) const { return frames_.at(trackedIndex(f)).posed; }
   std::vector<V3> liveMapPoints() const {
     std::vector<V3> X;
     if (frames_.empty()) return X;
@@ -305,7 +257,8 @@ class MonoSlam {
     return X;
   }
 
-  int numFrames() const { return static_cast<int>(frames_.size()); }
+  int numFrames() const { return inputFrames_; }          ///< frames given to process()
+  int frameStep() const { return opt_.frameStep; }         ///< every frameStep-th of them is tracked
   int numKeyframes() const { return static_cast<int>(keyframes_.size()); }
   int numLiveTracks() const { return static_cast<int>(tracks_.size()); }
   /// Bytes held for the whole sequence (observations, map, keyframe masks), excluding the two
@@ -320,6 +273,10 @@ class MonoSlam {
   }
 
  private:
+  std::size_t trackedIndex(int f) const {
+    if (f < 0 || f >= inputFrames_) throw Error("MonoSlam: frame " + std::to_string(f) + " was not processed");
+    return static_cast<std::size_t>(f / opt_.frameStep);
+  }
   enum class State { Initialising, Tracking };
   using Vec2f = Eigen::Matrix<float, 2, 1, Eigen::DontAlign>;
 
@@ -463,6 +420,7 @@ class MonoSlam {
   SlamOptions<Scalar> opt_;
   int width_ = 0, height_ = 0;
   bool finished_ = false;
+  int inputFrames_ = 0;  // frames given to process(), tracked or not (frameStep)
   State state_ = State::Initialising;
   ImagePyramid prevPyr_, curPyr_;
   struct BackFrame {

@@ -30,6 +30,8 @@
 #include "place_index.hpp"
 #include "sim3_ransac.hpp"
 #include "pose_graph.hpp"
+#include "slam_result.hpp"
+#include "frame_step.hpp"
 #include "slam_options.hpp"
 #include "mono_slam.hpp"
 #include "slam_option_table.hpp"

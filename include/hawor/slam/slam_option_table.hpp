@@ -36,6 +36,7 @@ const std::vector<Field<SlamOptions<Scalar>, int>>& intFields() {
   using O = SlamOptions<Scalar>;
   using T = int;
   static const std::vector<Field<O, T>> f = {
+      {"frameStep", [](O& o) -> T& { return o.frameStep; }},
       {"pyramidLevels", [](O& o) -> T& { return o.pyramidLevels; }},
       {"maxFeatures", [](O& o) -> T& { return o.maxFeatures; }},
       {"maskDilatePx", [](O& o) -> T& { return o.maskDilatePx; }},

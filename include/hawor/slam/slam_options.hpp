@@ -13,6 +13,7 @@
 #include "hawor/common.hpp"
 #include "hawor/slam/corners.hpp"
 #include "hawor/slam/focal_refine.hpp"
+#include "hawor/slam/frame_step.hpp"
 #include "hawor/slam/head_motion.hpp"
 #include "hawor/slam/keyframe_policy.hpp"
 #include "hawor/slam/klt.hpp"
@@ -285,6 +286,12 @@ struct SlamOptions {
   /// time and head motion as at 30 (synthetic presets rendered at 60 fps, seeds 1-8: geometric
   /// mean ATE 0.43 → 0.38 % of the path, hands_cover 0.74 → 0.49, fast_turns 1.86 → 1.50).
   Scalar fps = Scalar(30);
+  /// Track every frameStep-th frame and interpolate the frames between (frame_step.hpp); 0: the
+  /// largest step that keeps the tracked rate at or above 25 fps (autoFrameStep; 60 fps → 2).
+  /// The counts, angles and the rolling shutter's fraction below are then those of the tracked
+  /// rate, fps / frameStep. Measured on the synthetic presets rendered at 60 fps (seeds 1-8,
+  /// docs/benchmarks.md "Frame rate").
+  int frameStep = 0;
   int pyramidLevels = 4;
   KltOptions klt;
   CornerOptions corners;
@@ -351,6 +358,7 @@ struct SlamOptions {
   /// Throws hawor::Error naming the first bad field or combination.
   void validate() const {
     if (!(fps > Scalar(0)) || !(fps <= Scalar(1000))) throw Error("fps must be in (0, 1000]");
+    if (frameStep < 0 || frameStep > 100) throw Error("frameStep must be in [0, 100] (0: automatic)");
     if (pyramidLevels < 1 || maxFeatures < 20 || windowKeyframes < 2 || minInliers < 6 || lostFramesBeforeReset < 1) {
       throw Error("pyramidLevels must be >= 1, maxFeatures >= 20, windowKeyframes >= 2, minInliers >= 6, lostFramesBeforeReset >= 1");
     }
@@ -376,10 +384,17 @@ struct SlamOptions {
   /// both a time and the frames of evidence (views for a fit, frames lost before a reset):
   /// above 30 fps the time binds, below it the evidence does (scaled down at 15 fps, the synthetic
   /// presets' runs within 1 % went 20 → 18 of 32 and the kitchen clip's 15-fps copy 0.46 → 2.01 %).
+  /// With a frame step k (frameStep, or automatic) they are first those of the tracked frames:
+  /// fps / k, and the rolling shutter's readout a k-th of their interval. MonoSlam applies this
+  /// once; the result's frameStep is resolved.
   SlamOptions atFrameRate() const {
     if (!(fps > Scalar(0)) || !(fps <= Scalar(1000))) throw Error("fps must be in (0, 1000]");
+    if (frameStep < 0 || frameStep > 100) throw Error("frameStep must be in [0, 100] (0: automatic)");
     SlamOptions o = *this;
-    const double k = std::max(1.0, double(fps) / 30.0);
+    o.frameStep = frameStep > 0 ? frameStep : autoFrameStep(double(fps));
+    o.fps = fps / Scalar(o.frameStep);
+    o.rollingShutter = rollingShutter / Scalar(o.frameStep);
+    const double k = std::max(1.0, double(o.fps) / 30.0);
     if (k == 1.0) return o;
     auto frames = [k](int& n) { n = n <= 0 ? n : std::max(1, static_cast<int>(std::lround(n * k))); };
     auto perFrame = [k](Scalar& deg) { deg = Scalar(double(deg) / k); };

@@ -492,7 +492,7 @@ SlamResult<Scalar> MonoSlam<Scalar>::finish() {
     res.focal.fy = cam_.fy;
     res.focal.reason = opt_.finish.refineFocal ? "no map for the global bundle adjustment" : "off";
   }
-  return res;
+  return expandFrameStep(std::move(res), opt_.frameStep, inputFrames_);  // the frames between tracked ones
 }
 
 }  // namespace hawor
