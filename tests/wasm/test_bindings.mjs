@@ -434,6 +434,20 @@ if (!haveNative || !fs.existsSync(path.join(nativeDir, 'models', 'hand_right.npz
     'mask (width*height): length 7');
   const res = slam.finish();
   slam.delete();
+  // The same frames said to be at 60 fps: every other one tracked, the rest interpolated
+  // (SlamOptions::frameStep), the result still one pose a frame.
+  const slam60 = new core.MonoSlam(Ks, Ws, Hs, { useMasks: true, fps: 60 });
+  names.forEach((n, i) => {
+    const rgba = PNG.sync.read(fs.readFileSync(path.join(seq, 'rgb', n))).data;
+    slam60.process(new Uint8Array(rgba.buffer, rgba.byteOffset, rgba.length), masks[i]);
+  });
+  const res60 = slam60.finish();
+  slam60.delete();
+  const odd = (a) => [...a].filter((_, i) => i % 2 === 1);
+  check('SLAM at 60 fps: every other frame tracked, one pose a frame',
+    res60.translations.length === 3 * Tn && res60.status.length === Tn && res60.keyframe.length === Tn &&
+    odd(res60.status).every((s) => s === 1 || s === 2) && odd(res60.keyframe).every((k) => !k) &&
+    [...res60.keyframeDepths.frames].every((f) => f % 2 === 0) && res60.translations.every(Number.isFinite));
   const gtRows = readTum(path.join(seq, 'camera_gt.tum'));
   const gt = tumPoses(gtRows);
   const ate = core.evaluateCameras(gt.t, res.translations);
