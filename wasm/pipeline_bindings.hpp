@@ -2,7 +2,7 @@
 // JavaScript (web/src/pipeline/run.mjs), as `hawor world` feeds it natively.
 //
 //   new Pipeline(options, leftModel: HandModel, rightModel: HandModel), options {
-//       intrinsics [fx, fy, cx, cy] (the video's), width, height, lens?, fps?, readout?,
+//       intrinsics [fx, fy, cx, cy] (the video's), width, height, lens?, fps?, liveSource?, readout?,
 //       slamMaxSide?, maskDilatePx?, maskHoldSeconds?, refineFocal?, focalPriorSigma?, userFocal?, focalMaxPasses?,
 //       focalRerunBytes?, set? (SlamOptions "NAME=VALUE,..."), infill? ('spline'|'lerp'|'last'),
 //       handScaleSmooth?, groundScale?, eyeHeight?, depthMasks?, gravityAligned?,
@@ -213,6 +213,7 @@ hawor::PipelineOptions<double> optionsFrom(const val& o) {
   };
   if (!absent(o["lens"])) p.lens = o["lens"].as<std::string>();
   num("fps", p.fps);
+  flag("liveSource", p.liveSource);
   num("readout", p.readout);
   integer("slamMaxSide", p.slamMaxSide);
   integer("maskDilatePx", p.maskDilatePx);

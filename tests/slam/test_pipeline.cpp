@@ -500,4 +500,15 @@ TEST_CASE("pipeline: frame times from a source that drops frames", "[pipeline]")
     const hawor::PipelineResult<double> r = p.finish();
     CHECK(r.times == std::vector<double>{0.0, 1.0 / 30});
   }
+  // a 60-fps video: the SLAM tracks every other frame; a 60-fps camera that drops frames: every
+  // frame it is given
+  po.fps = 60;
+  {
+    const hawor::Pipeline<double> p(po, leftHand(), rightHand());
+    CHECK(p.slamOptions().atFrameRate().frameStep == 2);
+    po.liveSource = true;
+    const hawor::Pipeline<double> live(po, leftHand(), rightHand());
+    CHECK(live.slamOptions().atFrameRate().frameStep == 1);
+    CHECK(live.slamOptions().atFrameRate().fps == 60);
+  }
 }

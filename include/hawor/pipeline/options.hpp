@@ -20,6 +20,10 @@ struct PipelineOptions {
   PinholeCamera<Scalar> camera;          ///< intrinsics at the video's size (width, height set)
   std::string lens = "pinhole";          ///< 'pinhole', 'opencv:k1,k2,p1,p2[,k3]' or 'fisheye:k1..k4' (geometry/lens.hpp)
   Scalar fps = Scalar(30);
+  /// The frames come from a live source that drops frames while the pipeline is busy (a camera):
+  /// fps stays the camera's (the rolling shutter's), but the frames given are already thinned,
+  /// so the SLAM tracks every one of them (no SlamOptions::frameStep at a high camera rate).
+  bool liveSource = false;
   /// Rolling shutter: seconds from the first row's exposure to the last's (0: global shutter; at
   /// most one frame interval; negative: rows read bottom to top).
   Scalar readout = Scalar(0);

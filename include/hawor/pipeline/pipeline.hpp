@@ -421,6 +421,7 @@ class Pipeline {
     o.finish.refineFocal = opt_.refineFocal;
     o.rollingShutter = opt_.readout * opt_.fps;
     o.fps = opt_.fps;
+    if (opt_.liveSource) o.frameStep = 1;  // the source's own dropping thins the frames
     o.focal.priorSigmaLog = opt_.priorSigma();
     if (priorFx > Scalar(0)) {
       o.finish.refineFocal = true;

@@ -396,7 +396,7 @@ export async function runPipeline(source, options, hooks = {}) {
     // The method's policy lives in the core's Pipeline (include/hawor/pipeline/pipeline.hpp).
     const refineFocal = options.refineFocal ?? true;
     const pipeline = new core.Pipeline({
-      intrinsics: K, width, height, lens, fps, readout, refineFocal, userFocal: intr.focalSource === 'user-focal',
+      intrinsics: K, width, height, lens, fps, liveSource: !!options.live, readout, refineFocal, userFocal: intr.focalSource === 'user-focal',
       ...(options.focalPriorSigma !== undefined ? { focalPriorSigma: options.focalPriorSigma } : {}),
       ...(options.slamMaxSide !== undefined ? { slamMaxSide: options.slamMaxSide } : {}),
       ...(options.maskDilatePx !== undefined ? { maskDilatePx: options.maskDilatePx } : {}),
