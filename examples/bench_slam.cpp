@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -245,10 +246,11 @@ int main(int argc, char** argv) {
         }
         st.pathM = path;
         st.atePct = path > 0 ? 100.0 * st.ateM / path : 0;
-        st.msMedian = hawor::percentile(m == 0 ? tm : tu, 0.5);
-        st.msP95 = hawor::percentile(m == 0 ? tm : tu, 0.95);
+        const std::vector<double>& ms = m == 0 ? tm : tu;
+        st.msMedian = hawor::percentile(ms, 0.5);
+        st.msP95 = hawor::percentile(ms, 0.95);
         // the mean: with a frame step the frames between tracked ones cost ~0, and the median alone hides that
-        for (double v : m == 0 ? tm : tu) st.msMean += v / double(std::max<std::size_t>(1, (m == 0 ? tm : tu).size()));
+        st.msMean = std::accumulate(ms.begin(), ms.end(), 0.0) / double(std::max<std::size_t>(1, ms.size()));
         st.finishMs = std::chrono::duration<double, std::milli>(t1 - t0).count();
         st.keyframes = r.numKeyframes;
         st.losses = r.numLosses;
